@@ -1,0 +1,64 @@
+"""The ``seecap`` console entry point: a table of verbs, each a module with two functions.
+
+A verb module defines ``HELP`` (one line), ``add_arguments(parser)`` and ``run(args) -> int``.
+Modules are imported only when their verb runs, so ``seecap inspect`` never loads torch.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from davis_io import __version__
+from davis_io.errors import DavisIOError
+
+__all__ = ["VERBS", "main"]
+
+VERBS: dict[str, str] = {
+    # verb: module that implements it
+    "inspect": "davis_io.cli.inspect_verb",
+}
+"""Every verb of ``seecap``, in the order ``--help`` lists them."""
+
+EXIT_OK = 0
+EXIT_ERROR = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+
+def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, object]]:
+    parser = argparse.ArgumentParser(
+        prog="seecap",
+        description="DAVIS event camera to sharp HDR 3-D scenes: record, inspect, poses, fit.",
+    )
+    parser.add_argument("--version", action="version", version=f"seecap {__version__}")
+    verbs = parser.add_subparsers(dest="verb", metavar="VERB")
+    modules = {}
+    for name, module_name in VERBS.items():
+        module = importlib.import_module(module_name)
+        sub = verbs.add_parser(name, help=module.HELP, description=module.HELP)
+        module.add_arguments(sub)
+        modules[name] = module
+    return parser, modules
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run ``seecap``; return the process exit code (0 ok, 1 error, 2 usage, 130 Ctrl-C)."""
+    parser, modules = _build_parser()
+    args = parser.parse_args(argv)
+    if args.verb is None:
+        parser.print_help()
+        return EXIT_USAGE
+    try:
+        return int(modules[args.verb].run(args) or EXIT_OK)
+    except KeyboardInterrupt:
+        print("seecap: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except DavisIOError as error:
+        print(f"seecap {args.verb}: {error}", file=sys.stderr)
+        return EXIT_ERROR
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,46 @@
+"""Typed errors of the capture side; each message says what was wrong, where, and what to do."""
+
+from __future__ import annotations
+
+__all__ = [
+    "DavisIOError",
+    "DeviceError",
+    "FormatError",
+    "SessionError",
+    "UsageError",
+]
+
+
+class DavisIOError(Exception):
+    """Base of every error raised on purpose by ``davis_io``."""
+
+
+class UsageError(DavisIOError):
+    """A value given by the user (flag, option, argument) is not acceptable."""
+
+
+class FormatError(DavisIOError):
+    """A file is not what its reader expects.
+
+    Attributes:
+        path: the file, when known.
+        offset: byte offset of the problem, when known.
+    """
+
+    def __init__(self, message: str, *, path: str | None = None, offset: int | None = None):
+        where = []
+        if path is not None:
+            where.append(str(path))
+        if offset is not None:
+            where.append(f"byte offset {offset}")
+        super().__init__(f"{': '.join(where)}: {message}" if where else message)
+        self.path = path
+        self.offset = offset
+
+
+class DeviceError(DavisIOError):
+    """A camera could not be found, opened, configured or read."""
+
+
+class SessionError(DavisIOError):
+    """A session folder is missing, incomplete or inconsistent."""

@@ -1,0 +1,37 @@
+"""Parsing of durations given on the command line (seconds by default, ``ms`` and ``us`` accepted)."""
+
+from __future__ import annotations
+
+import re
+
+from davis_io.errors import UsageError
+
+__all__ = ["parse_duration_us"]
+
+_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|ms|us|µs)?\s*$")
+_SCALE_US = {None: 1_000_000, "s": 1_000_000, "ms": 1_000, "us": 1, "µs": 1}
+
+
+def parse_duration_us(text: str, *, what: str = "duration") -> int:
+    """Parse ``"0.15"``, ``"0.15s"``, ``"150ms"`` or ``"150000us"`` into whole microseconds.
+
+    Args:
+        text: the value as typed; a bare number is in seconds.
+        what: name of the option, used in the error message.
+
+    Returns:
+        The duration in µs, rounded to the nearest microsecond.
+
+    Raises:
+        UsageError: the text is not a positive duration.
+    """
+    match = _DURATION.match(str(text))
+    if not match:
+        raise UsageError(
+            f"{what} {text!r} is not a duration: give seconds (0.15), milliseconds (150ms) "
+            "or microseconds (150000us)"
+        )
+    value_us = round(float(match.group(1)) * _SCALE_US[match.group(2)])
+    if value_us <= 0:
+        raise UsageError(f"{what} {text!r} must be at least 1 µs")
+    return value_us

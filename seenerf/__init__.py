@@ -1,0 +1,3 @@
+"""See-NeRF for seecap sessions: radiance fields seen through learned sensor models (torch)."""
+
+__all__: list[str] = []
