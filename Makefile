@@ -11,7 +11,6 @@ DEMO_DIR ?= demo-session
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --upgrade pip
 
 $(STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/pip install "$(TORCH_PIN)"
@@ -20,8 +19,10 @@ $(STAMP): $(BIN)/python pyproject.toml
 
 install: $(STAMP)
 
+# The main job on the built-in default: the emulated camera recorded, then fitted end to end.
 demo: $(STAMP)
-	$(BIN)/python -m davis_io.demo --out $(DEMO_DIR)
+	$(BIN)/seecap record --emulate room --exposure 0.15 --out $(DEMO_DIR) --overwrite
+	$(BIN)/seecap fit $(DEMO_DIR) --preset fast --time-budget 8m
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q; status=$$?; \
