@@ -1,0 +1,25 @@
+"""DAVIS chip names as written in AEDAT headers, mapped to camera model and sensor size."""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["SENSOR_SIZES", "identify_chip"]
+
+SENSOR_SIZES = {"DAVIS346": (346, 260), "DAVIS240": (240, 180)}
+"""Camera model -> (width, height) in pixels of its DVS and APS arrays."""
+
+_MODEL = re.compile(r"davis\s*(346|240)", re.IGNORECASE)
+
+
+def identify_chip(name: str) -> tuple[str, int, int]:
+    """Return ``(model, width, height)`` for a chip name; ``(name, 0, 0)`` if unknown.
+
+    Accepts cAER names (``DAVIS346``, ``DAVIS346BSI``, ``DAVIS240C``) and jAER class names
+    (``eu.seebetter.ini.chips.davis.Davis346BColor``, ``...DAVIS240C``).
+    """
+    match = _MODEL.search(name)
+    if match is None:
+        return name.strip(), 0, 0
+    model = f"DAVIS{match.group(1)}"
+    return (model, *SENSOR_SIZES[model])
