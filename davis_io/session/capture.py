@@ -1,0 +1,134 @@
+"""Choosing what ``seecap record`` reads (camera, AEDAT replay or emulator) and recording it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from davis_io.errors import DeviceError, UsageError
+from davis_io.session.recorder import RecordingResult, record
+from davis_io.types import PacketSource
+
+__all__ = [
+    "NO_CAMERA_ADVICE",
+    "WITHOUT_CAMERA",
+    "CaptureRequest",
+    "open_capture_source",
+    "record_capture",
+]
+
+WITHOUT_CAMERA = (
+    "to record without a camera, `--replay FILE.aedat4` replays a recording and "
+    "`--emulate room` films a built-in scene"
+)
+NO_CAMERA_ADVICE = (
+    "plug a DAVIS346 or DAVIS240 into a USB port (check it with `seecap devices`; on Linux "
+    f"install the permissions rule with `sudo seecap udev --install`); {WITHOUT_CAMERA}"
+)
+_FRAME_GAP_US = 50_000
+"""Default frame interval beyond the exposure (camera and emulator alike)."""
+
+
+@dataclass(frozen=True)
+class CaptureRequest:
+    """What to record from, as given on the command line.
+
+    Attributes:
+        exposure_us: APS exposure to apply, µs (required for a camera; replay ignores it).
+        frame_interval_us: time between frame starts, µs (None: exposure + 50 ms).
+        frames: frames to record (None: until stopped, or all of a replay / emulation).
+        serial: camera serial number (None: the only camera attached).
+        replay: AEDAT file to replay instead of a camera.
+        emulate: built-in scene to film with the emulator instead of a camera.
+    """
+
+    exposure_us: int | None = None
+    frame_interval_us: int | None = None
+    frames: int | None = None
+    serial: str | None = None
+    replay: Path | None = None
+    emulate: str | None = None
+
+    @property
+    def applied_exposure_us(self) -> int | None:
+        """The exposure the source is set to (None for a replay: the file decides)."""
+        return None if self.replay is not None else self.exposure_us
+
+    def interval_us(self) -> int:
+        """Frame interval to apply, µs."""
+        return self.frame_interval_us or (self.exposure_us or 0) + _FRAME_GAP_US
+
+
+def open_capture_source(request: CaptureRequest) -> PacketSource:
+    """Open the replay file, the emulator or the camera the request names.
+
+    Raises:
+        UsageError: both --replay and --emulate, or a camera without --exposure.
+        DeviceError: no camera found (with advice on what to plug in or which flag to use).
+    """
+    if request.replay is not None and request.emulate is not None:
+        raise UsageError("--replay and --emulate exclude each other: give one source")
+    if request.replay is not None:
+        from davis_io.aedat import open_recording
+
+        return open_recording(request.replay)
+    if request.emulate is not None:
+        return _open_emulator(request)
+    return _open_camera(request)
+
+
+def _open_emulator(request: CaptureRequest) -> PacketSource:
+    from davis_io.emulator import EmulatedCamera
+
+    settings = {}
+    if request.exposure_us is not None:
+        settings["exposure_us"] = request.exposure_us
+        settings["frame_interval_us"] = request.interval_us()
+    if request.frames is not None:
+        settings["frames"] = request.frames
+    return EmulatedCamera(request.emulate, **settings)
+
+
+def _open_camera(request: CaptureRequest) -> PacketSource:
+    if request.exposure_us is None:
+        raise UsageError("recording from a camera needs --exposure (for example --exposure 0.15)")
+    try:
+        from davis_io.usb import ApsConfig, DavisConfig, open_camera
+    except ImportError as error:
+        message = f"camera support is not available ({error}): {NO_CAMERA_ADVICE}"
+        raise DeviceError(message) from error
+    aps = ApsConfig(exposure_us=request.exposure_us, frame_interval_us=request.interval_us())
+    try:
+        return open_camera(request.serial, DavisConfig(aps=aps))
+    except DeviceError as error:
+        raise DeviceError(f"{error}; {WITHOUT_CAMERA}") from error
+
+
+def record_capture(
+    request: CaptureRequest, out_dir: Path, **options
+) -> RecordingResult:
+    """Open the requested source, record it into ``out_dir``, and save emulator truth.
+
+    Args:
+        request: the source and its settings.
+        out_dir: the session folder to create.
+        **options: passed to :func:`davis_io.session.recorder.record` (``bins``,
+            ``duration_us``, ``overwrite``, ``status_callback``, ``preview``).
+
+    Returns:
+        The recording result (the emulator's ground truth is in ``out_dir/truth``).
+    """
+    source = open_capture_source(request)
+    result = record(
+        source,
+        out_dir,
+        exposure_us=request.applied_exposure_us,
+        frames=request.frames,
+        **options,
+    )
+    truth = getattr(source, "truth", None) if request.emulate is not None else None
+    if truth is not None:
+        from davis_io.emulator import save_truth
+
+        save_truth(truth, result.folder / "truth")
+    return result

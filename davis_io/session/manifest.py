@@ -1,0 +1,202 @@
+"""The session manifest ``session.json``: what was recorded, from what, how, and how it ended."""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from davis_io import __version__
+from davis_io.errors import SessionError
+from davis_io.types import ColorFilter, SourceInfo
+
+__all__ = [
+    "FORMAT_VERSION",
+    "MANIFEST_NAME",
+    "STATUS_COMPLETE",
+    "STATUS_INTERRUPTED",
+    "STATUS_RECORDING",
+    "DropCounters",
+    "SessionManifest",
+    "read_manifest",
+    "write_manifest",
+]
+
+FORMAT_VERSION = 1
+MANIFEST_NAME = "session.json"
+STATUS_RECORDING = "recording"
+STATUS_COMPLETE = "complete"
+STATUS_INTERRUPTED = "interrupted"
+_STATUSES = (STATUS_RECORDING, STATUS_COMPLETE, STATUS_INTERRUPTED)
+
+
+@dataclass
+class DropCounters:
+    """What was lost while recording; every counter is zero in a clean recording.
+
+    Attributes:
+        source_events: events the source reported lost (device FIFO, USB transfers).
+        queue_packets: packets dropped because the writer queue was full.
+        queue_events: events inside those dropped packets.
+        queue_frames: frames inside those dropped packets.
+        frames_events_lost: stored frames whose exposure window lost events.
+    """
+
+    source_events: int = 0
+    queue_packets: int = 0
+    queue_events: int = 0
+    queue_frames: int = 0
+    frames_events_lost: int = 0
+
+    @property
+    def total_events(self) -> int:
+        """Events known lost from any cause."""
+        return self.source_events + self.queue_events
+
+
+@dataclass
+class SessionManifest:
+    """Contents of ``session.json`` (format version 1); times are µs unless named otherwise.
+
+    Attributes:
+        camera: camera model, e.g. ``"DAVIS346"``.
+        serial: camera serial number ("" when unknown).
+        width: sensor width in pixels.
+        height: sensor height in pixels.
+        color_filter: colour filter pattern (a :class:`ColorFilter` value, ``"mono"``).
+        source: ``"usb"``, ``"replay:<file>"`` or ``"emulator:<scene>"``.
+        b: number of event bins computed at record time.
+        firmware_version: USB firmware version, when known.
+        logic_version: FPGA logic version, when known.
+        device_config: device configuration and biases as reported by the source.
+        exposure_requested_us: exposure asked for on the command line (None: not set).
+        exposure_measured_us: median exposure of the recorded frames (None: no frame).
+        start_time_utc: ISO 8601 UTC wall-clock time the recording started.
+        stop_time_utc: ISO 8601 UTC wall-clock time it stopped ("" while recording).
+        status: ``"recording"``, ``"complete"`` or ``"interrupted"``.
+        stop_reason: why an interrupted recording stopped ("" when complete).
+        frame_count: frames stored.
+        event_count: events stored.
+        drops: loss counters.
+        format_version: session format version (1).
+        tool_version: seecap version that wrote the session.
+    """
+
+    camera: str
+    serial: str
+    width: int
+    height: int
+    color_filter: str
+    source: str
+    b: int
+    firmware_version: int | None = None
+    logic_version: int | None = None
+    device_config: dict = field(default_factory=dict)
+    exposure_requested_us: int | None = None
+    exposure_measured_us: int | None = None
+    start_time_utc: str = ""
+    stop_time_utc: str = ""
+    status: str = STATUS_RECORDING
+    stop_reason: str = ""
+    frame_count: int = 0
+    event_count: int = 0
+    drops: DropCounters = field(default_factory=DropCounters)
+    format_version: int = FORMAT_VERSION
+    tool_version: str = __version__
+
+    @classmethod
+    def from_source(
+        cls, info: SourceInfo, *, b: int, exposure_requested_us: int | None, start_time_utc: str
+    ) -> SessionManifest:
+        """Start a manifest from what a source knows about its camera."""
+        return cls(
+            camera=info.camera,
+            serial=info.serial,
+            width=info.width,
+            height=info.height,
+            color_filter=info.color_filter.value,
+            source=info.origin,
+            b=b,
+            firmware_version=info.firmware_version,
+            logic_version=info.logic_version,
+            device_config=dict(info.extra),
+            exposure_requested_us=exposure_requested_us,
+            start_time_utc=start_time_utc,
+        )
+
+    @property
+    def filter_pattern(self) -> ColorFilter:
+        """The colour filter as a :class:`ColorFilter`."""
+        return ColorFilter(self.color_filter)
+
+    def to_json(self) -> str:
+        """Serialise as indented JSON (values JSON lacks, such as enums, as their text)."""
+        return json.dumps(dataclasses.asdict(self), indent=2, default=_json_text) + "\n"
+
+    @classmethod
+    def from_json(cls, text: str, *, where: str = MANIFEST_NAME) -> SessionManifest:
+        """Parse JSON written by :meth:`to_json`.
+
+        Raises:
+            SessionError: not JSON, a newer format version, missing or unknown fields.
+        """
+        try:
+            values = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise SessionError(f"{where}: not valid JSON ({error})") from error
+        if not isinstance(values, dict):
+            raise SessionError(f"{where}: expected a JSON object at the top level")
+        version = values.get("format_version")
+        if version != FORMAT_VERSION:
+            raise SessionError(
+                f"{where}: session format version {version!r}, this seecap reads version "
+                f"{FORMAT_VERSION}: use the seecap version that wrote it"
+            )
+        try:
+            values["drops"] = DropCounters(**values.get("drops", {}))
+            manifest = cls(**values)
+        except TypeError as error:
+            raise SessionError(f"{where}: unexpected or missing field ({error})") from error
+        if manifest.status not in _STATUSES:
+            raise SessionError(f"{where}: status {manifest.status!r} is not one of {_STATUSES}")
+        return manifest
+
+
+def _json_text(value) -> object:
+    """JSON form of the device facts JSON has no type for (enums, paths, numpy scalars)."""
+    if isinstance(value, enum.Enum):
+        return value.value
+    if hasattr(value, "item"):
+        return value.item()
+    return str(value)
+
+
+def read_manifest(session_dir: Path) -> SessionManifest:
+    """Read ``session.json`` of a session folder.
+
+    Raises:
+        SessionError: the file is missing or malformed.
+    """
+    path = Path(session_dir) / MANIFEST_NAME
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError as error:
+        raise SessionError(
+            f"{path} not found: {session_dir} is not a session folder (record one with "
+            "`seecap record`)"
+        ) from error
+    return SessionManifest.from_json(text, where=str(path))
+
+
+def write_manifest(session_dir: Path, manifest: SessionManifest) -> None:
+    """Write ``session.json`` atomically (temporary file, fsync, rename)."""
+    path = Path(session_dir) / MANIFEST_NAME
+    temporary = path.with_name(f".{MANIFEST_NAME}.tmp")
+    with open(temporary, "w", encoding="utf-8") as stream:
+        stream.write(manifest.to_json())
+        stream.flush()
+        os.fsync(stream.fileno())
+    os.replace(temporary, path)

@@ -1,0 +1,310 @@
+"""Reading a session folder: manifest, frames, events by time, bins (made on demand) and poses."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import TracebackType
+from typing import Self
+
+import h5py
+import numpy as np
+
+from davis_io.bins import bin_exposure
+from davis_io.errors import SessionError
+from davis_io.session.layout import (
+    EVENT_FIELDS,
+    FRAME_TIMES,
+    H5_NAME,
+    bins_path,
+    complete_rows,
+    create_bins_group,
+    poses_path,
+    read_events_between,
+    write_bins_row,
+)
+from davis_io.session.manifest import SessionManifest, read_manifest
+from davis_io.session.records import FramesTable, SessionBins, SessionPoses
+from davis_io.types import (
+    EVENT_DTYPE,
+    IMU_DTYPE,
+    TRIGGER_DTYPE,
+    ColorFilter,
+    Frame,
+    empty_events,
+)
+
+__all__ = ["Session", "TRUTH_DIR"]
+
+TRUTH_DIR = "truth"
+_BINS_FIELDS = ("split_us", "weights", "raw", "calibrated", "event_count")
+_FRAME_FIELDS = ("image", "events_lost", *FRAME_TIMES)
+
+
+class Session:
+    """A recorded session folder, read through ``session.json`` and ``session.h5``.
+
+    Open with :meth:`open`; use as a context manager to close the HDF5 file. A session whose
+    writer was killed is still readable (HDF5 SWMR mode); :attr:`needs_repair` is then True and
+    writing into it (bins for another b, poses) needs ``seecap inspect --repair`` first.
+    """
+
+    def __init__(self, folder: Path, manifest: SessionManifest, h5: h5py.File, needs_repair: bool):
+        self.folder = folder
+        self.manifest = manifest
+        self._h5 = h5
+        self.needs_repair = needs_repair
+
+    @classmethod
+    def open(cls, path: Path | str) -> Session:
+        """Open a session folder (or its ``session.h5`` / ``session.json``).
+
+        Raises:
+            SessionError: no manifest, no HDF5 file, or a file HDF5 cannot read.
+        """
+        folder = Path(path)
+        if folder.is_file():
+            folder = folder.parent
+        manifest = read_manifest(folder)
+        h5_path = folder / H5_NAME
+        if not h5_path.exists():
+            raise SessionError(f"{h5_path} not found: the session holds no recorded data")
+        try:
+            return cls(folder, manifest, h5py.File(h5_path, "r"), needs_repair=False)
+        except OSError as error:
+            if "already open for write" not in str(error):
+                raise SessionError(f"{h5_path}: HDF5 cannot read it ({error})") from error
+        # A writer that never closed the file: read it as a single-writer/multi-reader reader.
+        try:
+            return cls(folder, manifest, h5py.File(h5_path, "r", swmr=True), needs_repair=True)
+        except OSError as error:
+            raise SessionError(f"{h5_path}: HDF5 cannot read it ({error})") from error
+
+    def close(self) -> None:
+        """Close the HDF5 file."""
+        self._h5.close()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    @property
+    def h5_path(self) -> Path:
+        """Path of ``session.h5``."""
+        return self.folder / H5_NAME
+
+    @property
+    def width(self) -> int:
+        """Sensor width in pixels."""
+        return self.manifest.width
+
+    @property
+    def height(self) -> int:
+        """Sensor height in pixels."""
+        return self.manifest.height
+
+    @property
+    def color_filter(self) -> ColorFilter:
+        """Colour filter pattern of the sensor."""
+        return self.manifest.filter_pattern
+
+    @property
+    def truth_dir(self) -> Path | None:
+        """The ``truth/`` folder of an emulated session, or None."""
+        truth = self.folder / TRUTH_DIR
+        return truth if truth.is_dir() else None
+
+    @property
+    def frame_count(self) -> int:
+        """Complete frames stored (every per-frame dataset and the record-time bins hold them)."""
+        count = complete_rows(self._h5.get("frames"), _FRAME_FIELDS)
+        record_bins = bins_path(self.manifest.b)
+        if record_bins in self._h5:
+            count = min(count, complete_rows(self._h5[record_bins], _BINS_FIELDS))
+        return count
+
+    @property
+    def event_count(self) -> int:
+        """Events stored."""
+        return complete_rows(self._h5.get("events"), EVENT_FIELDS)
+
+    def frame(self, index: int) -> Frame:
+        """Frame ``index`` (negative counts from the end) with its four timestamps.
+
+        Raises:
+            SessionError: index out of range.
+        """
+        count = self.frame_count
+        if not -count <= index < count:
+            raise SessionError(f"frame {index} out of range: the session has {count} frames")
+        index %= count
+        frames = self._h5["frames"]
+        times = {name: int(frames[name][index]) for name in FRAME_TIMES}
+        bit_depth = int(frames["image"].attrs.get("bit_depth", 10))
+        return Frame(image=frames["image"][index], bit_depth=bit_depth, **times)
+
+    def frames_table(self) -> FramesTable:
+        """Timestamps and loss flags of every complete frame."""
+        count = self.frame_count
+        if count == 0:
+            empty = np.zeros(0, np.int64)
+            return FramesTable(empty, empty, empty, empty, np.zeros(0, np.bool_))
+        frames = self._h5["frames"]
+        columns = {name: frames[name][:count] for name in (*FRAME_TIMES, "events_lost")}
+        return FramesTable(**columns)
+
+    def events_between(self, t0_us: int, t1_us: int) -> np.ndarray:
+        """Events with ``t0_us <= t <= t1_us`` (both ends included), as ``EVENT_DTYPE``."""
+        if self.event_count == 0:
+            return empty_events()
+        return read_events_between(self._h5["events"], self.event_count, t0_us, t1_us)
+
+    def events_by_index(self, first: int, stop: int) -> np.ndarray:
+        """Stored events ``first`` (included) to ``stop`` (excluded), in time order."""
+        stop = min(stop, self.event_count)
+        out = np.empty(max(stop - first, 0), dtype=EVENT_DTYPE)
+        for name in EVENT_FIELDS if len(out) else ():
+            out[name] = self._h5["events"][name][first : first + len(out)]
+        return out
+
+    def imu(self) -> np.ndarray:
+        """Every IMU sample (``IMU_DTYPE``)."""
+        return _read_records(self._h5.get("imu"), IMU_DTYPE)
+
+    def triggers(self) -> np.ndarray:
+        """Every trigger (``TRIGGER_DTYPE``)."""
+        return _read_records(self._h5.get("triggers"), TRIGGER_DTYPE)
+
+    def has_bins(self, b: int) -> bool:
+        """True when bins for ``b`` are stored for every frame."""
+        path = bins_path(b)
+        return path in self._h5 and complete_rows(self._h5[path], _BINS_FIELDS) >= self.frame_count
+
+    def stored_bins(self) -> list[int]:
+        """Every b whose bins are stored, ascending."""
+        return sorted(int(name[1:]) for name in self._h5.get("bins", {}))
+
+    def window_event_counts(self) -> np.ndarray | None:
+        """Events inside each frame's exposure window (from the stored bins), or None."""
+        for b in self.stored_bins():
+            if self.has_bins(b):
+                return self._h5[bins_path(b)]["event_count"][: self.frame_count]
+        return None
+
+    def bins(self, b: int, *, recompute: bool = False) -> SessionBins:
+        """Bins for ``b`` bins per exposure; computed from the stored events and saved if missing.
+
+        Args:
+            b: bins per exposure, >= 1.
+            recompute: compute and save them again even when stored.
+
+        Raises:
+            SessionError: bad ``b``, or bins must be written and the session needs repair first.
+        """
+        if int(b) != b or b < 1:
+            raise SessionError(f"number of bins {b!r} must be a whole number >= 1")
+        if recompute or not self.has_bins(b):
+            self._compute_bins(b)
+        group = self._h5[bins_path(b)]
+        count = self.frame_count
+        arrays = {name: group[name][:count] for name in _BINS_FIELDS}
+        return SessionBins(b=int(b), **arrays)
+
+    def poses(self, b: int) -> SessionPoses | None:
+        """Poses stored for ``b``, or None when none were estimated yet."""
+        path = poses_path(b)
+        if path not in self._h5:
+            return None
+        group = self._h5[path]
+        return SessionPoses(
+            c2w=group["c2w"][()],
+            registered=group["registered"][()],
+            intrinsics=group["intrinsics"][()],
+            distortion=np.asarray(group["intrinsics"].attrs.get("distortion", []), np.float64),
+            bounds=group["bounds"][()],
+        )
+
+    def write_poses(self, b: int, poses: SessionPoses) -> None:
+        """Store (or replace) the poses for ``b``.
+
+        Raises:
+            SessionError: shapes do not match the session, or it needs repair first.
+        """
+        expected = (self.frame_count, b + 1)
+        if poses.c2w.shape != (*expected, 4, 4) or poses.registered.shape != expected:
+            raise SessionError(
+                f"poses for b={b} must be c2w {(*expected, 4, 4)} and registered {expected}, got "
+                f"{poses.c2w.shape} and {poses.registered.shape}"
+            )
+        if poses.intrinsics.shape != (4,) or poses.bounds.shape != (2,):
+            raise SessionError("intrinsics must be (fx, fy, cx, cy) and bounds (near, far)")
+        with self._writable() as h5:
+            path = poses_path(b)
+            if path in h5:
+                del h5[path]
+            group = h5.create_group(path)
+            group["c2w"] = np.asarray(poses.c2w, np.float64)
+            group["registered"] = np.asarray(poses.registered, np.bool_)
+            group["intrinsics"] = np.asarray(poses.intrinsics, np.float64)
+            group["intrinsics"].attrs["distortion"] = np.asarray(poses.distortion, np.float64)
+            group["bounds"] = np.asarray(poses.bounds, np.float64)
+
+    def _compute_bins(self, b: int) -> None:
+        """Bin every frame's exposure for ``b`` from the stored events and save the result."""
+        table = self.frames_table()
+        with self._writable() as h5:
+            if bins_path(b) in h5:
+                del h5[bins_path(b)]
+            group = create_bins_group(h5, b=b, width=self.width, height=self.height)
+            for start_us, end_us in zip(
+                table.exposure_start_us, table.exposure_end_us, strict=True
+            ):
+                window = self.events_between(int(start_us), int(end_us))
+                exposure = bin_exposure(
+                    window, int(start_us), int(end_us), b, self.width, self.height
+                )
+                write_bins_row(group, exposure)
+
+    def _writable(self) -> _WritableSession:
+        """Reopen the HDF5 file for writing for the duration of a ``with`` block."""
+        if self.needs_repair:
+            raise SessionError(
+                f"{self.folder}: the recording was not closed cleanly; run "
+                f"`seecap inspect {self.folder} --repair` before adding bins or poses"
+            )
+        return _WritableSession(self)
+
+
+class _WritableSession:
+    """Context that swaps a session's read-only HDF5 handle for a writable one and back."""
+
+    def __init__(self, session: Session):
+        self._session = session
+
+    def __enter__(self) -> h5py.File:
+        self._session._h5.close()
+        try:
+            self._session._h5 = h5py.File(self._session.h5_path, "r+")
+        except OSError as error:
+            self._session._h5 = h5py.File(self._session.h5_path, "r")
+            raise SessionError(f"{self._session.h5_path}: cannot write ({error})") from error
+        return self._session._h5
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self._session._h5.close()
+        self._session._h5 = h5py.File(self._session.h5_path, "r")
+
+
+def _read_records(group: h5py.Group | None, dtype: np.dtype) -> np.ndarray:
+    """Read the column datasets of ``group`` (None: missing) into one structured array."""
+    count = complete_rows(group, dtype.names)
+    out = np.empty(count, dtype=dtype)
+    for name in dtype.names if count else ():
+        out[name] = group[name][:count]
+    return out

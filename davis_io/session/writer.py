@@ -1,0 +1,160 @@
+"""Incremental ``session.h5`` writer in SWMR mode: a killed process leaves a readable file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from davis_io.bins import ExposureBins
+from davis_io.errors import SessionError
+from davis_io.session.layout import (
+    FRAME_TIMES,
+    append_rows,
+    bins_path,
+    create_image_dataset,
+    create_layout,
+    read_events_between,
+    write_bins_row,
+)
+from davis_io.types import Frame
+
+__all__ = ["SessionWriter"]
+
+_DEFAULT_IMAGE_DTYPE = np.uint16
+_DEFAULT_BIT_DEPTH = 10
+_EVENT_BLOCK = 1 << 18
+"""Events are written in blocks of at least this many (two chunks): small appends to a compressed
+chunk would recompress it every time."""
+_CHUNK_CACHE_BYTES = 64 << 20
+_KINDS = ("events", "imu", "triggers")
+
+
+class SessionWriter:
+    """Append events, IMU samples, triggers and binned frames to a new ``session.h5``.
+
+    The file works in HDF5's single-writer/multiple-reader (SWMR) mode from the start: every
+    :meth:`flush` writes what is held and leaves a file that readers (and a later
+    ``Session.open`` after a crash) see in a consistent state. SWMR forbids creating datasets,
+    so the one dataset whose dtype only the first frame tells, ``/frames/image``, is created by
+    closing the file, reopening it, creating the dataset and entering SWMR mode again.
+    Events are held until a block of ``_EVENT_BLOCK`` is complete or the next flush.
+    """
+
+    def __init__(self, path: Path, *, width: int, height: int, b: int):
+        self.path = Path(path)
+        self.width, self.height, self.b = width, height, b
+        self._held: dict[str, list[np.ndarray]] = {kind: [] for kind in _KINDS}
+        self._held_events = 0
+        try:
+            self._h5 = h5py.File(self.path, "w", libver="latest", rdcc_nbytes=_CHUNK_CACHE_BYTES)
+        except OSError as error:
+            raise SessionError(f"cannot create {self.path}: {error}") from error
+        create_layout(self._h5, width=width, height=height, b=b)
+        self._enter_swmr()
+        self.events_written = 0
+        self.frames_written = 0
+
+    @property
+    def events_received(self) -> int:
+        """Events written plus events held for the next block."""
+        return self.events_written + self._held_events
+
+    def write_events(self, events: np.ndarray) -> None:
+        """Append events (``EVENT_DTYPE``, sorted, later than every event written before)."""
+        if len(events) == 0:
+            return
+        self._held["events"].append(events)
+        self._held_events += len(events)
+        if self._held_events >= _EVENT_BLOCK:
+            self._spill("events")
+
+    def write_imu(self, imu: np.ndarray) -> None:
+        """Append IMU samples (``IMU_DTYPE``); written at the next flush."""
+        if len(imu):
+            self._held["imu"].append(imu)
+
+    def write_triggers(self, triggers: np.ndarray) -> None:
+        """Append triggers (``TRIGGER_DTYPE``); written at the next flush."""
+        if len(triggers):
+            self._held["triggers"].append(triggers)
+
+    def write_frame(self, frame: Frame, *, events_lost: bool, bins: ExposureBins) -> None:
+        """Append one frame with its loss flag and its bins (bins first, timestamps last).
+
+        Raises:
+            SessionError: the image is not a ``(height, width)`` array of the session's depth.
+        """
+        if frame.image.shape != (self.height, self.width):
+            raise SessionError(
+                f"frame image of shape {frame.image.shape} does not fit the {self.width}x"
+                f"{self.height} sensor: sessions store full raw frames (no ROI, no demosaicing)"
+            )
+        if "image" not in self._columns["frames"]:
+            self._add_image_dataset(frame.image.dtype, frame.bit_depth)
+        frames = self._columns["frames"]
+        if not np.can_cast(frame.image.dtype, frames["image"].dtype, "safe"):
+            raise SessionError(
+                f"frame {self.frames_written} is {frame.image.dtype}, earlier frames were "
+                f"{frames['image'].dtype}: a session holds frames of one bit depth"
+            )
+        write_bins_row(self._h5[bins_path(self.b)], bins)
+        append_rows(frames["image"], frame.image[None].astype(frames["image"].dtype))
+        append_rows(frames["events_lost"], np.array([events_lost]))
+        for name in FRAME_TIMES:
+            append_rows(frames[name], np.array([getattr(frame, name)], dtype=np.int64))
+        self.frames_written += 1
+
+    def read_events(self, t0_us: int, t1_us: int) -> np.ndarray:
+        """Events written or held so far with ``t0_us <= t <= t1_us``."""
+        self.flush()
+        return read_events_between(self._h5["events"], self.events_written, t0_us, t1_us)
+
+    def flush(self) -> None:
+        """Write everything held and make it durable and visible to readers."""
+        for kind in _KINDS:
+            self._spill(kind)
+        self._h5.flush()
+
+    def close(self) -> None:
+        """Write what is still held, flush and close the file (idempotent).
+
+        A session without frames still gets its (empty, 16-bit) ``/frames/image``.
+        """
+        if not self._h5.id.valid:
+            return
+        try:
+            self.flush()
+            if "image" not in self._columns["frames"]:
+                self._add_image_dataset(_DEFAULT_IMAGE_DTYPE, _DEFAULT_BIT_DEPTH)
+        finally:
+            if self._h5.id.valid:
+                self._h5.close()
+
+    def _spill(self, kind: str) -> None:
+        """Append the held records of one kind to their datasets."""
+        held = self._held[kind]
+        if not held:
+            return
+        self._held[kind] = []
+        for name, dataset in self._columns[kind].items():
+            append_rows(dataset, np.concatenate([records[name] for records in held]))
+        if kind == "events":
+            self._held_events = 0
+            self.events_written += sum(len(records) for records in held)
+
+    def _enter_swmr(self) -> None:
+        self._h5.swmr_mode = True
+        self._columns = {group: dict(self._h5[group].items()) for group in ("frames", *_KINDS)}
+
+    def _add_image_dataset(self, image_dtype, bit_depth: int) -> None:
+        """Close, reopen, create ``/frames/image`` and return to SWMR mode."""
+        self.flush()
+        self._h5.close()
+        self._h5 = h5py.File(self.path, "a", libver="latest", rdcc_nbytes=_CHUNK_CACHE_BYTES)
+        create_image_dataset(
+            self._h5, width=self.width, height=self.height, image_dtype=image_dtype,
+            bit_depth=bit_depth,
+        )
+        self._enter_swmr()

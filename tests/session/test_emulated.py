@@ -1,0 +1,24 @@
+"""Recording the built-in emulator end to end, with its ground truth beside the session."""
+
+import pytest
+
+from davis_io.session import Session
+from davis_io.session.capture import CaptureRequest, record_capture
+
+
+@pytest.mark.slow
+def test_emulated_recording_keeps_exposure_frames_and_truth(tmp_path):
+    request = CaptureRequest(exposure_us=20_000, frames=2, emulate="room")
+    result = record_capture(request, tmp_path / "s", bins=4)
+    assert result.status == "complete"
+    manifest = result.manifest
+    assert manifest.source == "emulator:room" and manifest.frame_count == 2
+    assert manifest.exposure_requested_us == manifest.exposure_measured_us == 20_000
+    with Session.open(tmp_path / "s") as session:
+        assert session.truth_dir == tmp_path / "s" / "truth"
+        assert session.color_filter.is_color
+        bins = session.bins(4)
+        assert (bins.event_count > 0).all()
+        # Frame interval: exposure + 50 ms (the emulator's and the camera's default).
+        starts = session.frames_table().exposure_start_us
+        assert starts[1] - starts[0] == 70_000
