@@ -1,0 +1,68 @@
+"""``seecap poses``: camera poses of a session from event-deblurred frames and COLMAP."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+__all__ = ["HELP", "add_arguments", "run"]
+
+HELP = "estimate camera poses (EDI latent frames + COLMAP) and store them in the session"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Declare the options of ``seecap poses``."""
+    parser.add_argument("session", type=Path, help="session folder")
+    parser.add_argument("--bins", type=int, default=4, help="event bins per exposure (b)")
+    parser.add_argument(
+        "--intrinsics",
+        type=Path,
+        help="known intrinsics: JSON with fx, fy, cx, cy in pixels (pixel centres at integers), "
+        "or a text file with those four numbers",
+    )
+    parser.add_argument(
+        "--threshold", type=float, help="DVS contrast threshold (log units per event)"
+    )
+    parser.add_argument("--force", action="store_true", help="estimate again even if stored")
+
+
+class _StageBars:
+    """One tqdm bar per stage, closed when the next stage starts."""
+
+    def __init__(self):
+        self.stage, self.bar = None, None
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        from tqdm import tqdm
+
+        if stage != self.stage:
+            self.close()
+            self.stage = stage
+            self.bar = tqdm(total=total or None, desc=stage, unit="img", leave=True)
+        self.bar.n = done
+        self.bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def run(args: argparse.Namespace) -> int:
+    """Estimate the poses and print the report."""
+    from davis_io.poses.estimate import estimate_poses, read_intrinsics
+
+    intrinsics = read_intrinsics(args.intrinsics) if args.intrinsics else None
+    bars = _StageBars()
+    try:
+        report = estimate_poses(
+            args.session,
+            b=args.bins,
+            intrinsics=intrinsics,
+            force=args.force,
+            progress=bars,
+            threshold=args.threshold,
+        )
+    finally:
+        bars.close()
+    print(report.summary())
+    return 0

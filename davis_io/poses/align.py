@@ -1,0 +1,276 @@
+"""Pose geometry: similarity fits, pose errors, interpolation in time and frame conversions.
+
+Every pose here is a camera-to-world ``4x4`` matrix with OpenCV camera axes (x right, y down,
+z forward), the project's convention. COLMAP stores world-to-camera poses with the same camera
+axes, so the conversion from COLMAP is a rigid inverse; this module is the only place that does
+it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from davis_io.errors import UsageError
+
+__all__ = [
+    "Similarity",
+    "align_poses",
+    "c2w_from_w2c",
+    "colmap_from_opencv_intrinsics",
+    "opencv_from_colmap_intrinsics",
+    "interpolate_poses",
+    "quaternion_from_rotation",
+    "rotation_error_deg",
+    "rotation_from_quaternion",
+    "umeyama",
+]
+
+
+@dataclass(frozen=True)
+class Similarity:
+    """A similarity transform ``x -> scale * rotation @ x + translation``.
+
+    Attributes:
+        scale: positive scale factor.
+        rotation: ``(3, 3)`` rotation matrix (determinant +1).
+        translation: ``(3,)`` translation, in the target frame's units.
+    """
+
+    scale: float
+    rotation: np.ndarray
+    translation: np.ndarray
+
+    def apply_points(self, points: np.ndarray) -> np.ndarray:
+        """Map ``(N, 3)`` points to the target frame."""
+        return self.scale * np.asarray(points, float) @ self.rotation.T + self.translation
+
+    def apply_poses(self, c2w: np.ndarray) -> np.ndarray:
+        """Map ``(..., 4, 4)`` camera-to-world poses to the target frame."""
+        c2w = np.asarray(c2w, float)
+        out = c2w.copy()
+        out[..., :3, :3] = self.rotation @ c2w[..., :3, :3]
+        out[..., :3, 3] = self.apply_points(c2w[..., :3, 3])
+        return out
+
+    def inverse(self) -> Similarity:
+        """The transform that maps the target frame back to the source frame."""
+        rotation = self.rotation.T
+        return Similarity(1.0 / self.scale, rotation, -(rotation @ self.translation) / self.scale)
+
+
+def umeyama(source: np.ndarray, target: np.ndarray, *, with_scale: bool = True) -> Similarity:
+    """Least-squares similarity mapping ``source`` points onto ``target`` points (Umeyama 1991).
+
+    Minimises ``sum ||target_i - (s R source_i + t)||^2`` in closed form from the SVD of the
+    cross-covariance, with the reflection correction that keeps ``det R = +1``.
+
+    Args:
+        source: ``(N, 3)`` points, e.g. estimated camera centres.
+        target: ``(N, 3)`` corresponding points, e.g. true camera centres.
+        with_scale: fit the scale too (``False`` gives the rigid fit, scale 1).
+
+    Returns:
+        The fitted :class:`Similarity`.
+
+    Raises:
+        UsageError: shapes differ, fewer than 3 points, or the source points are all equal.
+    """
+    source = np.asarray(source, float)
+    target = np.asarray(target, float)
+    if source.shape != target.shape or source.ndim != 2 or source.shape[1] != 3:
+        raise UsageError(
+            f"umeyama needs two (N, 3) point sets of equal shape, got {source.shape} and "
+            f"{target.shape}"
+        )
+    if len(source) < 3:
+        raise UsageError(f"umeyama needs at least 3 point pairs, got {len(source)}")
+    source_mean, target_mean = source.mean(axis=0), target.mean(axis=0)
+    source_centred, target_centred = source - source_mean, target - target_mean
+    source_variance = np.mean(np.sum(source_centred**2, axis=1))
+    if source_variance <= 1e-18:
+        raise UsageError("umeyama: the source points all coincide; a similarity is undefined")
+    covariance = target_centred.T @ source_centred / len(source)
+    u, singular, vt = np.linalg.svd(covariance)
+    sign = np.eye(3)
+    if np.linalg.det(u) * np.linalg.det(vt) < 0:
+        sign[2, 2] = -1.0
+    rotation = u @ sign @ vt
+    scale = float(np.trace(np.diag(singular) @ sign) / source_variance) if with_scale else 1.0
+    translation = target_mean - scale * rotation @ source_mean
+    return Similarity(scale, rotation, translation)
+
+
+def align_poses(source_c2w: np.ndarray, target_c2w: np.ndarray) -> Similarity:
+    """Similarity mapping ``source`` poses onto ``target`` poses: centres and orientations.
+
+    Camera centres alone leave the rotation poorly determined when they lie near a plane or a
+    line (a hand-held sweep); so the fit also uses, per camera, the three points one step
+    along its axes, the step being the target centres' RMS spread (and that over the scale of
+    a first, centres-only fit on the source side).
+
+    Args:
+        source_c2w: ``(N, 4, 4)`` poses, e.g. estimated.
+        target_c2w: ``(N, 4, 4)`` corresponding poses, e.g. true.
+    """
+    source_c2w, target_c2w = np.asarray(source_c2w, float), np.asarray(target_c2w, float)
+    first = umeyama(source_c2w[:, :3, 3], target_c2w[:, :3, 3])
+    centres = target_c2w[:, :3, 3]
+    step = float(np.sqrt(np.mean(np.sum((centres - centres.mean(axis=0)) ** 2, axis=1))))
+
+    def with_axes(c2w: np.ndarray, length: float) -> np.ndarray:
+        tips = c2w[:, None, :3, 3] + length * np.swapaxes(c2w[:, :3, :3], 1, 2)
+        return np.concatenate([c2w[:, None, :3, 3], tips], axis=1).reshape(-1, 3)
+
+    return umeyama(with_axes(source_c2w, step / first.scale), with_axes(target_c2w, step))
+
+
+def rotation_error_deg(rotation_a: np.ndarray, rotation_b: np.ndarray) -> np.ndarray:
+    """Angle of ``R_a^T R_b`` in degrees, for ``(..., 3, 3)`` stacks of rotations."""
+    relative = np.swapaxes(np.asarray(rotation_a, float), -1, -2) @ np.asarray(rotation_b, float)
+    cosine = (np.trace(relative, axis1=-2, axis2=-1) - 1.0) / 2.0
+    return np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
+
+
+def c2w_from_w2c(rotation_w2c: np.ndarray, translation_w2c: np.ndarray) -> np.ndarray:
+    """Camera-to-world ``4x4`` from COLMAP's world-to-camera ``R, t`` (same OpenCV camera axes).
+
+    ``x_cam = R x_world + t``, so ``c2w = [[R^T, -R^T t], [0, 1]]``.
+    """
+    rotation = np.asarray(rotation_w2c, float)
+    c2w = np.eye(4)
+    c2w[:3, :3] = rotation.T
+    c2w[:3, 3] = -rotation.T @ np.asarray(translation_w2c, float)
+    return c2w
+
+
+COLMAP_PIXEL_OFFSET = 0.5
+"""COLMAP puts the centre of the top-left pixel at (0.5, 0.5); OpenCV and the session at (0, 0)."""
+
+
+def opencv_from_colmap_intrinsics(intrinsics: np.ndarray) -> np.ndarray:
+    """``(fx, fy, cx, cy)`` from COLMAP's pixel convention to the session's (OpenCV)."""
+    out = np.array(intrinsics, float)
+    out[2:] -= COLMAP_PIXEL_OFFSET
+    return out
+
+
+def colmap_from_opencv_intrinsics(intrinsics: np.ndarray) -> np.ndarray:
+    """``(fx, fy, cx, cy)`` from the session's pixel convention (OpenCV) to COLMAP's."""
+    out = np.array(intrinsics, float)
+    out[2:] += COLMAP_PIXEL_OFFSET
+    return out
+
+
+def quaternion_from_rotation(rotation: np.ndarray) -> np.ndarray:
+    """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of a ``(3, 3)`` rotation matrix."""
+    m = np.asarray(rotation, float)
+    # The largest of the four squared components is the numerically safe one to divide by.
+    squares = np.array(
+        [
+            1 + m[0, 0] + m[1, 1] + m[2, 2],
+            1 + m[0, 0] - m[1, 1] - m[2, 2],
+            1 - m[0, 0] + m[1, 1] - m[2, 2],
+            1 - m[0, 0] - m[1, 1] + m[2, 2],
+        ]
+    )
+    k = int(np.argmax(squares))
+    big = 0.5 * np.sqrt(max(squares[k], 1e-300))
+    if k == 0:
+        q = [
+            big,
+            (m[2, 1] - m[1, 2]) / (4 * big),
+            (m[0, 2] - m[2, 0]) / (4 * big),
+            (m[1, 0] - m[0, 1]) / (4 * big),
+        ]
+    elif k == 1:
+        q = [
+            (m[2, 1] - m[1, 2]) / (4 * big),
+            big,
+            (m[0, 1] + m[1, 0]) / (4 * big),
+            (m[0, 2] + m[2, 0]) / (4 * big),
+        ]
+    elif k == 2:
+        q = [
+            (m[0, 2] - m[2, 0]) / (4 * big),
+            (m[0, 1] + m[1, 0]) / (4 * big),
+            big,
+            (m[1, 2] + m[2, 1]) / (4 * big),
+        ]
+    else:
+        q = [
+            (m[1, 0] - m[0, 1]) / (4 * big),
+            (m[0, 2] + m[2, 0]) / (4 * big),
+            (m[1, 2] + m[2, 1]) / (4 * big),
+            big,
+        ]
+    q = np.array(q) / np.linalg.norm(q)
+    return q if q[0] >= 0 else -q
+
+
+def rotation_from_quaternion(quaternion: np.ndarray) -> np.ndarray:
+    """``(3, 3)`` rotation matrix of a quaternion ``(w, x, y, z)`` (normalised first)."""
+    w, x, y, z = np.asarray(quaternion, float) / np.linalg.norm(quaternion)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _slerp(q0: np.ndarray, q1: np.ndarray, fraction: float) -> np.ndarray:
+    """Spherical linear interpolation between unit quaternions along the shorter arc."""
+    dot = float(np.dot(q0, q1))
+    if dot < 0:
+        q1, dot = -q1, -dot
+    if dot > 0.9995:  # nearly parallel: linear interpolation is exact to float precision
+        q = q0 + fraction * (q1 - q0)
+        return q / np.linalg.norm(q)
+    angle = np.arccos(dot)
+    return (np.sin((1 - fraction) * angle) * q0 + np.sin(fraction * angle) * q1) / np.sin(angle)
+
+
+def interpolate_poses(
+    known_times_us: np.ndarray, known_c2w: np.ndarray, query_times_us: np.ndarray
+) -> np.ndarray:
+    """Camera-to-world poses at ``query_times_us`` from poses known at other times.
+
+    Rotations are slerped and centres interpolated linearly between the two nearest known
+    times; outside the known range the nearest known pose is held (no extrapolation).
+
+    Args:
+        known_times_us: ``(K,)`` strictly increasing times, µs.
+        known_c2w: ``(K, 4, 4)`` poses at those times.
+        query_times_us: ``(Q,)`` times, µs (any order).
+
+    Returns:
+        ``(Q, 4, 4)`` poses.
+
+    Raises:
+        UsageError: no known pose, mismatched lengths or times not strictly increasing.
+    """
+    times = np.asarray(known_times_us, np.int64)
+    known_c2w = np.asarray(known_c2w, float)
+    if len(times) == 0 or len(times) != len(known_c2w):
+        raise UsageError(
+            f"interpolate_poses needs at least one known pose and one time per pose, got "
+            f"{len(times)} times and {len(known_c2w)} poses"
+        )
+    if np.any(np.diff(times) <= 0):
+        raise UsageError("interpolate_poses: known times must be strictly increasing")
+    query = np.asarray(query_times_us, np.int64)
+    if len(times) == 1:
+        return np.repeat(known_c2w[:1], len(query), axis=0)
+    quaternions = np.array([quaternion_from_rotation(c2w[:3, :3]) for c2w in known_c2w])
+    upper = np.clip(np.searchsorted(times, query), 1, len(times) - 1)
+    lower = upper - 1
+    fractions = np.clip((query - times[lower]) / (times[upper] - times[lower]), 0.0, 1.0)
+    out = np.tile(np.eye(4), (len(query), 1, 1))
+    for row, (i, j, fraction) in enumerate(zip(lower, upper, fractions, strict=True)):
+        rotation = _slerp(quaternions[i], quaternions[j], fraction)
+        out[row, :3, :3] = rotation_from_quaternion(rotation)
+        out[row, :3, 3] = (1 - fraction) * known_c2w[i, :3, 3] + fraction * known_c2w[j, :3, 3]
+    return out

@@ -1,0 +1,268 @@
+"""The one module that talks to COLMAP (through pycolmap, never a subprocess).
+
+Feature extraction into one database, matching, and incremental mapping into one sparse model
+per attempt, all kept in a working folder (``session/colmap/``) so a later run reuses them.
+"""
+
+from __future__ import annotations
+
+import enum
+import shutil
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pycolmap
+
+from davis_io.errors import DavisIOError
+from davis_io.poses.align import (
+    c2w_from_w2c,
+    colmap_from_opencv_intrinsics,
+    opencv_from_colmap_intrinsics,
+)
+
+__all__ = [
+    "DATABASE_NAME",
+    "ColmapError",
+    "MapperSettings",
+    "Matcher",
+    "SparseModel",
+    "extract_features",
+    "match_features",
+    "reconstruct",
+]
+
+DATABASE_NAME = "database.db"
+SEED = 0
+
+
+class ColmapError(DavisIOError):
+    """COLMAP could not reconstruct the images (too little texture, overlap or parallax)."""
+
+
+class Matcher(enum.Enum):
+    """How image pairs get matched (every pair of images is matched)."""
+
+    EXHAUSTIVE = "exhaustive"
+    """SIFT nearest neighbours with the ratio test and cross check, then RANSAC verification."""
+    GUIDED = "guided"
+    """A looser ratio test, then matches guided by the verified two-view geometry (more
+    matches on weak texture and blur)."""
+
+
+@dataclass(frozen=True)
+class MapperSettings:
+    """Incremental mapping settings that the recovery strategies vary.
+
+    Attributes:
+        relaxed_initialisation: accept an initial pair with fewer inliers and a smaller
+            triangulation angle (2 degrees instead of 4; COLMAP's own default is 16) and
+            register images with fewer inliers.
+        image_names: map only these images (all images in the database when empty).
+    """
+
+    relaxed_initialisation: bool = False
+    image_names: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class SparseModel:
+    """What a reconstruction gives back, in plain arrays.
+
+    Attributes:
+        c2w: camera-to-world ``4x4`` (OpenCV axes, COLMAP units) per registered image name.
+        intrinsics: ``(fx, fy, cx, cy)`` of the shared camera, pixels, session convention
+            (pixel centres at integers).
+        distortion: the camera's remaining parameters (radial terms), empty for pinhole.
+        points: ``(N, 3)`` sparse 3-D points.
+        track_counts: number of 3-D points each registered image observes.
+        bounds: ``(near, far)`` depth of the sparse points seen by the registered images
+            (1st and 99th percentiles of all observations, trimming stray points), COLMAP units.
+        reprojection_error_px: mean reprojection error of all observations, pixels.
+    """
+
+    c2w: dict[str, np.ndarray]
+    intrinsics: np.ndarray
+    distortion: np.ndarray
+    points: np.ndarray
+    track_counts: dict[str, int] = field(default_factory=dict)
+    bounds: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    reprojection_error_px: float = 0.0
+
+
+def _quiet() -> None:
+    pycolmap.logging.minloglevel = 3  # failures come back as ColmapError with advice instead
+    pycolmap.set_random_seed(SEED)
+
+
+def extract_features(
+    work_dir: Path,
+    image_dir: Path,
+    image_names: Sequence[str],
+    *,
+    intrinsics: np.ndarray | None = None,
+) -> Path:
+    """Write SIFT features of ``image_names`` (one shared camera) to ``work_dir/database.db``.
+
+    Args:
+        work_dir: folder that keeps the database (created).
+        image_dir: folder holding the images.
+        image_names: file names inside ``image_dir``, in capture order.
+        intrinsics: known ``(fx, fy, cx, cy)`` in the session's pixel convention (pixel centres
+            at integers; pinhole, held fixed), or ``None`` to let COLMAP estimate one focal
+            length (principal point at the centre, no distortion).
+
+    Returns:
+        The database path. An existing database is replaced.
+    """
+    _quiet()
+    work_dir.mkdir(parents=True, exist_ok=True)
+    database = work_dir / DATABASE_NAME
+    database.unlink(missing_ok=True)
+    reader = pycolmap.ImageReaderOptions()
+    # One focal length and no distortion while unknown: a radial term with the focal length
+    # collapses on the small baselines of a hand-held sweep.
+    reader.camera_model = "SIMPLE_PINHOLE"
+    if intrinsics is not None:
+        reader.camera_model = "PINHOLE"
+        values = colmap_from_opencv_intrinsics(intrinsics)
+        reader.camera_params = ",".join(f"{value:.6f}" for value in values)
+    extraction = pycolmap.FeatureExtractionOptions()
+    extraction.use_gpu = False
+    pycolmap.extract_features(
+        database,
+        image_dir,
+        image_names=list(image_names),
+        camera_mode=pycolmap.CameraMode.SINGLE,
+        reader_options=reader,
+        extraction_options=extraction,
+        device=pycolmap.Device.cpu,
+    )
+    return database
+
+
+def match_features(database: Path, matcher: Matcher) -> None:
+    """Match and geometrically verify every image pair, replacing earlier matches.
+
+    Args:
+        database: database written by :func:`extract_features`.
+        matcher: how to match.
+    """
+    _quiet()
+    with pycolmap.Database.open(database) as opened:
+        opened.clear_matches()
+        opened.clear_two_view_geometries()
+    matching = pycolmap.FeatureMatchingOptions()
+    matching.use_gpu = False
+    if matcher is Matcher.GUIDED:
+        matching.guided_matching = True
+        matching.sift.max_ratio = 0.9
+    pycolmap.match_exhaustive(database, matching_options=matching, device=pycolmap.Device.cpu)
+
+
+def _pipeline_options(settings: MapperSettings, fixed_intrinsics: bool):
+    options = pycolmap.IncrementalPipelineOptions()
+    options.multiple_models = False
+    options.random_seed = SEED
+    options.extract_colors = False
+    options.image_names = list(settings.image_names)
+    options.mapper.init_min_tri_angle = 4.0  # COLMAP's 16 degrees rejects handheld baselines
+    if fixed_intrinsics:
+        options.ba_refine_focal_length = False
+        options.ba_refine_extra_params = False
+        options.ba_refine_principal_point = False
+    if settings.relaxed_initialisation:
+        options.mapper.init_min_tri_angle = 2.0
+        options.mapper.init_min_num_inliers = 50
+        options.mapper.abs_pose_min_num_inliers = 15
+        options.mapper.init_max_forward_motion = 0.99
+        options.min_model_size = 3
+    return options
+
+
+def reconstruct(
+    database: Path,
+    image_dir: Path,
+    model_dir: Path,
+    settings: MapperSettings = MapperSettings(),
+    *,
+    fixed_intrinsics: bool = False,
+    start_from: Path | None = None,
+    on_image: Callable[[], None] | None = None,
+) -> SparseModel:
+    """Incremental mapping of the database's images into ``model_dir`` (replaced if present).
+
+    Args:
+        database: database with features and verified matches.
+        image_dir: folder holding the images.
+        model_dir: folder for the sparse model (COLMAP binary files).
+        settings: initialisation and image subset.
+        fixed_intrinsics: keep the database camera's parameters (known intrinsics).
+        start_from: a model folder to extend (its images keep their registration).
+        on_image: called each time an image is registered (progress display).
+
+    Returns:
+        The largest model found.
+
+    Raises:
+        ColmapError: no model could be built.
+    """
+    _quiet()
+    shutil.rmtree(model_dir, ignore_errors=True)
+    model_dir.mkdir(parents=True)
+    models = pycolmap.incremental_mapping(
+        database,
+        image_dir,
+        model_dir,
+        options=_pipeline_options(settings, fixed_intrinsics),
+        input_path=start_from or "",
+        next_image_callback=on_image,
+    )
+    if not models:
+        raise ColmapError(
+            "COLMAP found no initial image pair with enough matches: the frames have too little "
+            "texture or overlap. Record a scene with more visible detail, move the camera more "
+            "slowly or use more frames"
+        )
+    best = max(models.values(), key=lambda model: model.num_reg_images())
+    best.write(model_dir)
+    return sparse_model_from(best)
+
+
+def load_model(model_dir: Path) -> SparseModel:
+    """Read a sparse model written by :func:`reconstruct` (COLMAP binary files)."""
+    return sparse_model_from(pycolmap.Reconstruction(model_dir))
+
+
+def sparse_model_from(reconstruction: pycolmap.Reconstruction) -> SparseModel:
+    """Plain arrays from a pycolmap reconstruction with one shared camera."""
+    camera = next(iter(reconstruction.cameras.values()))
+    focal = camera.focal_length_idxs()
+    params = np.asarray(camera.params, float)
+    fx, fy = params[focal[0]], params[focal[-1]]
+    cx, cy = camera.principal_point_x, camera.principal_point_y
+    extra = np.asarray([params[i] for i in camera.extra_params_idxs()], float)
+    c2w, tracks, depths = {}, {}, []
+    points = {pid: p.xyz for pid, p in reconstruction.points3D.items()}
+    for image in reconstruction.images.values():
+        if not image.has_pose:
+            continue
+        pose = image.cam_from_world().matrix()
+        c2w[image.name] = c2w_from_w2c(pose[:, :3], pose[:, 3])
+        seen = [p.point3D_id for p in image.points2D if p.has_point3D()]
+        tracks[image.name] = len(seen)
+        if seen:
+            xyz = np.array([points[pid] for pid in seen])
+            depths.append(xyz @ pose[2, :3] + pose[2, 3])
+    depths = np.concatenate(depths) if depths else np.zeros(0)
+    bounds = np.percentile(depths, [1.0, 99.0]) if depths.size else np.zeros(2)
+    return SparseModel(
+        c2w=c2w,
+        intrinsics=opencv_from_colmap_intrinsics([fx, fy, cx, cy]),
+        distortion=extra,
+        points=np.array(list(points.values())).reshape(-1, 3),
+        track_counts=tracks,
+        bounds=bounds,
+        reprojection_error_px=float(reconstruction.compute_mean_reprojection_error()),
+    )

@@ -1,0 +1,305 @@
+"""``estimate_poses``: EDI latent frames of a session, COLMAP with recovery, poses and a report."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from davis_io.errors import UsageError
+from davis_io.poses.align import interpolate_poses
+from davis_io.poses.colmap import ColmapError, SparseModel
+from davis_io.poses.latent import ResponseCurve, latent_images, sharpness
+from davis_io.poses.recovery import reconstruct_with_recovery
+from davis_io.poses.truth import test_poses_from_truth
+from davis_io.session import Session, SessionPoses
+
+__all__ = [
+    "DEFAULT_THRESHOLD",
+    "PoseReport",
+    "estimate_poses",
+    "known_response",
+    "read_intrinsics",
+    "stated_threshold",
+]
+
+DEFAULT_THRESHOLD = 0.3
+"""Contrast threshold when neither the caller nor the camera states one: the nominal DAVIS
+threshold at default biases, natural-log units per event."""
+
+Progress = Callable[[str, int, int], None]
+"""``progress(stage, done, total)``; ``total`` is 0 when unknown."""
+
+
+@dataclass(frozen=True)
+class PoseReport:
+    """How pose estimation went.
+
+    Attributes:
+        registered: latent frames COLMAP registered.
+        total: latent frames written (frames x (b+1)).
+        reprojection_error_px: mean reprojection error, pixels.
+        track_counts: ``(F, b+1)`` 3-D points seen by each latent frame (0: not registered).
+        strategy: the recovery strategy whose model was kept.
+        tried: strategies run, in order.
+        threshold: contrast threshold used by the EDI, natural-log units per event.
+        threshold_source: ``given``, ``camera configuration`` or ``default``.
+        intrinsics: ``(fx, fy, cx, cy)`` pixels.
+        bounds: near and far depth of the sparse points.
+        test_c2w: held-out views' poses in the estimated frame (emulated sessions with truth
+            only; for evaluation, they come from the true poses), or None.
+    """
+
+    registered: int
+    total: int
+    reprojection_error_px: float
+    track_counts: np.ndarray
+    strategy: str
+    tried: tuple[str, ...]
+    threshold: float
+    threshold_source: str
+    intrinsics: np.ndarray
+    bounds: np.ndarray
+    test_c2w: np.ndarray | None = field(default=None)
+
+    @property
+    def registered_fraction(self) -> float:
+        """Share of latent frames registered."""
+        return self.registered / self.total if self.total else 0.0
+
+    def summary(self) -> str:
+        """Several human-readable lines."""
+        per_view = self.track_counts.sum(axis=1)
+        return "\n".join(
+            [
+                f"registered {self.registered}/{self.total} latent frames "
+                f"({100 * self.registered_fraction:.1f}%) with strategy {self.strategy} "
+                f"(tried: {', '.join(self.tried)})",
+                f"mean reprojection error {self.reprojection_error_px:.3f} px",
+                "intrinsics fx {:.2f} fy {:.2f} cx {:.2f} cy {:.2f} px".format(*self.intrinsics),
+                f"bounds near {self.bounds[0]:.3f} far {self.bounds[1]:.3f}",
+                f"contrast threshold {self.threshold:.3f} ({self.threshold_source})",
+                "tracks per view: " + " ".join(str(int(n)) for n in per_view),
+            ]
+        )
+
+    def to_json(self) -> dict:
+        """JSON-safe dictionary (arrays as lists)."""
+        out = asdict(self)
+        for key, value in out.items():
+            if isinstance(value, np.ndarray):
+                out[key] = value.tolist()
+        return out
+
+    @classmethod
+    def from_json(cls, data: dict) -> PoseReport:
+        """Inverse of :meth:`to_json`."""
+        data = dict(data)
+        for key in ("track_counts", "intrinsics", "bounds", "test_c2w"):
+            data[key] = None if data[key] is None else np.asarray(data[key])
+        data["tried"] = tuple(data["tried"])
+        return cls(**data)
+
+
+def known_response(session: Session) -> ResponseCurve | None:
+    """The APS response curve when the session's camera states it (the emulator does)."""
+    name = session.manifest.device_config.get("emulator", {}).get("response")
+    if name is None:
+        return None
+    from davis_io.emulator.response import apply_response
+
+    exposure = np.exp(np.linspace(-12.0, 8.0, 4096))
+    return ResponseCurve(exposure, np.maximum.accumulate(apply_response(name, exposure)))
+
+
+def stated_threshold(session: Session) -> float | None:
+    """The DVS contrast threshold the camera configuration states (the emulator's preset)."""
+    preset = session.manifest.device_config.get("emulator", {}).get("dvs_preset")
+    if preset is None:
+        return None
+    from davis_io.emulator import DVS_PRESETS
+
+    params = DVS_PRESETS[preset]
+    return 0.5 * (params.threshold_on + params.threshold_off)
+
+
+def _write_latent_frames(session, bins, threshold, response, image_dir, progress):
+    image_dir.mkdir(parents=True, exist_ok=True)
+    names, scores = [], []
+    for i in range(session.frame_count):
+        images = latent_images(
+            session.frame(i),
+            bins.calibrated[i],
+            bins.weights[i],
+            threshold,
+            session.color_filter,
+            response,
+        )
+        view = [f"{i:04d}_{k}.png" for k in range(len(images))]
+        for name, image in zip(view, images, strict=True):
+            bgr = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
+            cv2.imwrite(str(image_dir / name), bgr)
+        names.append(view)
+        scores.append([sharpness(image) for image in images])
+        progress("latent frames", i + 1, session.frame_count)
+    return names, scores
+
+
+def _session_poses(model: SparseModel, names, split_us: np.ndarray) -> SessionPoses:
+    flat_names = [n for view in names for n in view]
+    registered = np.array([n in model.c2w for n in flat_names]).reshape(split_us.shape)
+    times = split_us.reshape(-1)
+    known = np.flatnonzero(registered.reshape(-1))
+    # Equal split times (two latent points at one instant) keep the first registered pose.
+    known = known[np.concatenate([[True], np.diff(times[known]) > 0])]
+    known_c2w = np.array([model.c2w[flat_names[j]] for j in known])
+    c2w = interpolate_poses(times[known], known_c2w, times)
+    for j in np.flatnonzero(registered.reshape(-1)):
+        c2w[j] = model.c2w[flat_names[j]]
+    return SessionPoses(
+        c2w=c2w.reshape(*split_us.shape, 4, 4),
+        registered=registered,
+        intrinsics=model.intrinsics,
+        distortion=model.distortion,
+        bounds=model.bounds,
+    )
+
+
+def read_intrinsics(path: Path | str) -> np.ndarray:
+    """Read ``(fx, fy, cx, cy)`` from JSON (keys fx, fy, cx, cy) or a text file of 4 numbers.
+
+    Raises:
+        UsageError: the file is missing or holds something else.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise UsageError(f"{path}: cannot read the intrinsics file ({error.strerror})") from None
+    try:
+        if path.suffix.lower() == ".json":
+            data = json.loads(text)
+            values = [float(data[key]) for key in ("fx", "fy", "cx", "cy")]
+        else:
+            values = [float(word) for word in text.replace(",", " ").split()]
+    except (ValueError, KeyError, TypeError) as error:
+        raise UsageError(
+            f"{path}: intrinsics must be JSON with fx, fy, cx, cy or four numbers ({error})"
+        ) from None
+    return _check_intrinsics(values)
+
+
+def _check_intrinsics(intrinsics) -> np.ndarray | None:
+    if intrinsics is None:
+        return None
+    values = np.asarray(intrinsics, float).reshape(-1)
+    if values.shape != (4,) or not np.all(np.isfinite(values)) or np.any(values[:2] <= 0):
+        raise UsageError(
+            f"intrinsics must be four numbers fx, fy, cx, cy in pixels with fx, fy > 0, got "
+            f"{values.tolist()}"
+        )
+    return values
+
+
+def estimate_poses(
+    session: Session | Path | str,
+    *,
+    b: int = 4,
+    intrinsics: np.ndarray | None = None,
+    force: bool = False,
+    progress: Progress | None = None,
+    threshold: float | None = None,
+) -> PoseReport:
+    """Estimate the camera pose at every latent time point of every frame and store it.
+
+    Writes the EDI latent frames to ``session/colmap/images/``, reconstructs them with COLMAP
+    (database and models kept in ``session/colmap/``), stores the poses for ``b`` in the
+    session (unregistered latent time points interpolated in time and flagged) and the report
+    in ``session/colmap/report.json``.
+
+    Args:
+        session: an open :class:`~davis_io.session.Session` or its folder.
+        b: bins per exposure (b+1 latent frames per frame).
+        intrinsics: known ``(fx, fy, cx, cy)`` in pixels (held fixed), or None to estimate.
+        force: recompute even when poses for ``b`` and their report exist.
+        progress: ``progress(stage, done, total)`` for a progress display.
+        threshold: contrast threshold (natural-log units per event), or None for the one the
+            camera configuration states, else ``DEFAULT_THRESHOLD``.
+
+    Returns:
+        The :class:`PoseReport`.
+
+    Raises:
+        ColmapError: COLMAP could not reconstruct the frames (with advice).
+        SessionError, UsageError: the session or an argument is not usable.
+    """
+    if not isinstance(session, Session):
+        with Session.open(session) as opened:
+            return estimate_poses(
+                opened,
+                b=b,
+                intrinsics=intrinsics,
+                force=force,
+                progress=progress,
+                threshold=threshold,
+            )
+    progress = progress or (lambda _stage, _done, _total: None)
+    intrinsics = _check_intrinsics(intrinsics)
+    work_dir = session.folder / "colmap"
+    report_path = work_dir / "report.json"
+    if not force and session.poses(b) is not None and report_path.exists():
+        return PoseReport.from_json(json.loads(report_path.read_text()))
+    if session.frame_count < 2:
+        raise ColmapError(
+            f"{session.folder}: {session.frame_count} frame(s); poses need at least 2 frames "
+            "seen from different positions. Record longer"
+        )
+    bins = session.bins(b)
+    response = known_response(session)
+    if threshold is not None:
+        threshold_source = "given"
+    elif (threshold := stated_threshold(session)) is not None:
+        threshold_source = "camera configuration"
+    else:
+        threshold, threshold_source = DEFAULT_THRESHOLD, "default"
+    names, scores = _write_latent_frames(
+        session, bins, threshold, response, work_dir / "images", progress
+    )
+    total = len(names) * (b + 1)
+    registered_so_far = [0]
+
+    def on_image() -> None:
+        registered_so_far[0] = min(registered_so_far[0] + 1, total)
+        progress("registering", registered_so_far[0], total)
+
+    outcome = reconstruct_with_recovery(
+        work_dir,
+        work_dir / "images",
+        names,
+        scores,
+        intrinsics=intrinsics,
+        stage=lambda name: progress(name, 0, 0),
+        on_image=on_image,
+    )
+    poses = _session_poses(outcome.model, names, bins.split_us)
+    session.write_poses(b, poses)
+    tracks = np.array([[outcome.model.track_counts.get(n, 0) for n in view] for view in names])
+    report = PoseReport(
+        registered=int(poses.registered.sum()),
+        total=total,
+        reprojection_error_px=outcome.model.reprojection_error_px,
+        track_counts=tracks,
+        strategy=outcome.strategy,
+        tried=outcome.tried,
+        threshold=threshold,
+        threshold_source=threshold_source,
+        intrinsics=poses.intrinsics,
+        bounds=poses.bounds,
+        test_c2w=test_poses_from_truth(session.truth_dir, poses, bins.split_us),
+    )
+    report_path.write_text(json.dumps(report.to_json(), indent=1))
+    return report

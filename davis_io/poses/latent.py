@@ -1,0 +1,102 @@
+"""Latent frames of one APS frame as 8-bit images for COLMAP, and how sharp they are.
+
+The EDI runs on the frame as recorded (a colour sensor's raw mosaic, each mosaic pixel with its
+own event map), in the linear domain when the response curve is known and on the normalised
+image otherwise; only then are the latent mosaics demosaiced with OpenCV for COLMAP.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from davis_io.errors import UsageError
+from davis_io.poses.edi import edi_latent_frames
+from davis_io.types import ColorFilter, Frame
+
+__all__ = ["ResponseCurve", "latent_images", "normalised_image", "sharpness"]
+
+_BAYER_TO_RGB = {
+    ColorFilter.RGGB: cv2.COLOR_BayerRGGB2RGB,
+    ColorFilter.GRBG: cv2.COLOR_BayerGRBG2RGB,
+    ColorFilter.GBRG: cv2.COLOR_BayerGBRG2RGB,
+    ColorFilter.BGGR: cv2.COLOR_BayerBGGR2RGB,
+}
+"""OpenCV names the pattern by the 2x2 block's top-left pair; ``*2RGB`` gives RGB order."""
+
+
+@dataclass(frozen=True)
+class ResponseCurve:
+    """A monotone camera response tabulated as pixel value against linear exposure.
+
+    Attributes:
+        exposure: ``(K,)`` increasing linear exposure (any positive scale).
+        value: ``(K,)`` non-decreasing normalised pixel value in ``[0, 1]`` at each exposure.
+    """
+
+    exposure: np.ndarray
+    value: np.ndarray
+
+    def to_linear(self, values: np.ndarray) -> np.ndarray:
+        """Normalised pixel values to linear exposure (piecewise linear inverse)."""
+        return np.interp(values, self.value, self.exposure)
+
+    def to_values(self, exposure: np.ndarray) -> np.ndarray:
+        """Linear exposure to normalised pixel values, clipped to the table's range."""
+        return np.interp(exposure, self.exposure, self.value)
+
+
+def normalised_image(frame: Frame) -> np.ndarray:
+    """The frame's image as float64 in ``[0, 1]`` (full scale ``2**bit_depth - 1``)."""
+    return np.asarray(frame.image, np.float64) / float(2**frame.bit_depth - 1)
+
+
+def _to_8bit(image: np.ndarray, color_filter: ColorFilter) -> np.ndarray:
+    codes = np.clip(np.rint(image * 255.0), 0, 255).astype(np.uint8)
+    if not color_filter.is_color:
+        return codes
+    if color_filter not in _BAYER_TO_RGB:
+        raise UsageError(
+            f"colour filter {color_filter.value} cannot be demosaiced for COLMAP; only the "
+            f"2x2 Bayer patterns {', '.join(c.value for c in _BAYER_TO_RGB)} are supported"
+        )
+    return cv2.cvtColor(codes, _BAYER_TO_RGB[color_filter])
+
+
+def latent_images(
+    frame: Frame,
+    counts: np.ndarray,
+    weights: np.ndarray,
+    threshold: float,
+    color_filter: ColorFilter,
+    response: ResponseCurve | None = None,
+) -> list[np.ndarray]:
+    """The b+1 EDI latent frames of ``frame`` as 8-bit images (RGB when colour).
+
+    Args:
+        frame: the blurry APS frame (monochrome or raw mosaic).
+        counts: ``(b, H, W)`` calibrated event counts of its exposure.
+        weights: ``(b+1,)`` trapezoid weights.
+        threshold: contrast threshold, natural-log units per event.
+        color_filter: the sensor's colour filter.
+        response: the response curve, or None to deblur the normalised values directly.
+
+    Returns:
+        ``b+1`` images ``(H, W)`` uint8, or ``(H, W, 3)`` uint8 RGB for Bayer sensors.
+    """
+    blurry = normalised_image(frame)
+    if response is None:
+        latent = edi_latent_frames(blurry, counts, weights, threshold)
+    else:
+        # Latent exposures beyond the table saturate to its last value, like the sensor would.
+        linear = edi_latent_frames(response.to_linear(blurry), counts, weights, threshold)
+        latent = response.to_values(linear)
+    return [_to_8bit(image, color_filter) for image in latent]
+
+
+def sharpness(image: np.ndarray) -> float:
+    """Variance of the Laplacian of the (grey) image: larger is sharper."""
+    grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+    return float(cv2.Laplacian(grey.astype(np.float32), cv2.CV_32F).var())

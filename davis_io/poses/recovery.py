@@ -1,0 +1,177 @@
+"""Reconstruction with fallbacks: the documented strategies, tried in order until one registers.
+
+Every strategy but the last maps the sharpest latent frame of each view first (wider
+baselines for the initial pair) and then registers all latent frames into that model.
+
+1. ``exhaustive``: SIFT matching of every pair (the default).
+2. ``guided``: another matcher, a looser ratio test plus geometry-guided matching.
+3. ``relaxed-initialisation``: accept a smaller, lower-parallax initial pair.
+4. ``sharpest-per-view``: map only the sharpest latent frame of each view; the other latent
+   time points get poses interpolated in time (done by the caller for every unregistered one).
+
+A strategy succeeds when it registers at least ``REGISTERED_FRACTION`` of its images.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from davis_io.poses.colmap import (
+    DATABASE_NAME,
+    ColmapError,
+    MapperSettings,
+    Matcher,
+    SparseModel,
+    extract_features,
+    match_features,
+    reconstruct,
+)
+
+__all__ = [
+    "MINIMUM_FRACTION",
+    "REGISTERED_FRACTION",
+    "STRATEGIES",
+    "Outcome",
+    "Strategy",
+    "reconstruct_with_recovery",
+]
+
+REGISTERED_FRACTION = 0.9
+"""Share of a strategy's images that must register for it to count as a success."""
+
+MINIMUM_FRACTION = 0.5
+"""Below this share of its images (or under 3 images) even the best model is not usable."""
+
+
+@dataclass(frozen=True)
+class Strategy:
+    """One way of running COLMAP.
+
+    Attributes:
+        name: name shown in the report.
+        matcher: how to match (a new matcher replaces the database's matches).
+        relaxed_initialisation: see :class:`~davis_io.poses.colmap.MapperSettings`.
+        sharpest_only: map only the sharpest latent frame of each view.
+    """
+
+    name: str
+    matcher: Matcher
+    relaxed_initialisation: bool = False
+    sharpest_only: bool = False
+
+
+STRATEGIES: tuple[Strategy, ...] = (
+    Strategy("exhaustive", Matcher.EXHAUSTIVE),
+    Strategy("guided", Matcher.GUIDED),
+    Strategy("relaxed-initialisation", Matcher.GUIDED, relaxed_initialisation=True),
+    Strategy("sharpest-per-view", Matcher.GUIDED, relaxed_initialisation=True, sharpest_only=True),
+)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """The model kept and how it was obtained.
+
+    Attributes:
+        model: the best sparse model found.
+        strategy: name of the strategy that produced it.
+        succeeded: whether that strategy reached ``REGISTERED_FRACTION``.
+        tried: names of the strategies run, in order.
+    """
+
+    model: SparseModel
+    strategy: str
+    succeeded: bool
+    tried: tuple[str, ...]
+
+
+def _images_of(strategy: Strategy, names: Sequence[Sequence[str]], sharpness) -> list[str]:
+    if not strategy.sharpest_only:
+        return [name for view in names for name in view]
+    return [view[int(np.argmax(scores))] for view, scores in zip(names, sharpness, strict=True)]
+
+
+def _map(strategy, images, work_dir, image_dir, names, sharpness, mapping) -> SparseModel:
+    """Keyframes (sharpest per view) first, then, unless keyframes are all, every image."""
+    model_dir = work_dir / "sparse" / strategy.name
+    keyframes = _images_of(Strategy("", strategy.matcher, sharpest_only=True), names, sharpness)
+    keyframe_dir = model_dir if strategy.sharpest_only else model_dir / "keyframes"
+    settings = MapperSettings(strategy.relaxed_initialisation, tuple(keyframes))
+    model = reconstruct(work_dir / DATABASE_NAME, image_dir, keyframe_dir, settings, **mapping)
+    if strategy.sharpest_only:
+        return model
+    settings = MapperSettings(strategy.relaxed_initialisation, tuple(images))
+    return reconstruct(
+        work_dir / DATABASE_NAME,
+        image_dir,
+        model_dir / "all",
+        settings,
+        start_from=keyframe_dir,
+        **mapping,
+    )
+
+
+def reconstruct_with_recovery(
+    work_dir: Path,
+    image_dir: Path,
+    names: Sequence[Sequence[str]],
+    sharpness: Sequence[Sequence[float]],
+    *,
+    intrinsics: np.ndarray | None = None,
+    stage: Callable[[str], None] | None = None,
+    on_image: Callable[[], None] | None = None,
+) -> Outcome:
+    """Extract features once, then try :data:`STRATEGIES` in order.
+
+    Args:
+        work_dir: the COLMAP folder (database, ``sparse/<strategy>/`` models).
+        image_dir: folder of the latent frames.
+        names: per view, its latent frame file names in time order.
+        sharpness: per view, the sharpness of each latent frame.
+        intrinsics: known ``(fx, fy, cx, cy)`` or None.
+        stage: called with a stage name when a stage starts (progress display).
+        on_image: called when an image registers (progress display).
+
+    Returns:
+        The first successful strategy's outcome, else the one that registered the largest
+        share of its images (at least ``MINIMUM_FRACTION`` and 3 images).
+
+    Raises:
+        ColmapError: no strategy produced a usable model.
+    """
+    stage = stage or (lambda _name: None)
+    stage("features")
+    database = extract_features(
+        work_dir, image_dir, [n for view in names for n in view], intrinsics=intrinsics
+    )
+    best, tried, matched = None, [], None
+    mapping = {"fixed_intrinsics": intrinsics is not None, "on_image": on_image}
+    for strategy in STRATEGIES:
+        tried.append(strategy.name)
+        if strategy.matcher is not matched:
+            stage(f"matching ({strategy.matcher.value})")
+            match_features(database, strategy.matcher)
+            matched = strategy.matcher
+        images = _images_of(strategy, names, sharpness)
+        stage(f"mapping ({strategy.name})")
+        try:
+            model = _map(strategy, images, work_dir, image_dir, names, sharpness, mapping)
+        except ColmapError:
+            continue
+        fraction = len(model.c2w) / len(images)
+        if fraction >= REGISTERED_FRACTION:
+            return Outcome(model, strategy.name, True, tuple(tried))
+        if best is None or fraction > best[2]:
+            best = (model, strategy.name, fraction)
+    if best is None or best[2] < MINIMUM_FRACTION or len(best[0].c2w) < 3:
+        raise ColmapError(
+            f"COLMAP could not reconstruct these frames (tried {', '.join(tried)}): they show "
+            "too little texture, overlap or parallax. Record a scene with more visible detail, "
+            "move the camera around rather than only rotating it, or give known intrinsics "
+            "with --intrinsics"
+        )
+    return Outcome(best[0], best[1], False, tuple(tried))

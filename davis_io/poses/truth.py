@@ -1,0 +1,81 @@
+"""Estimated poses against an emulated session's ground truth (evaluation only).
+
+Estimated poses live in COLMAP's frame; a similarity fitted between the estimated and the
+true training poses (Umeyama on camera centres and points along the camera axes) relates
+the two. Everything here reads ``truth/`` and therefore only
+exists for emulated sessions; nothing in the estimation itself uses it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from davis_io.poses.align import Similarity, align_poses, rotation_error_deg
+from davis_io.session import SessionPoses
+
+__all__ = ["PoseErrors", "compare_with_truth", "test_poses_from_truth"]
+
+
+@dataclass(frozen=True)
+class PoseErrors:
+    """Errors of registered latent poses after the similarity alignment to the truth.
+
+    Attributes:
+        rotation_deg: ``(N,)`` rotation error per registered latent pose, degrees.
+        translation_fraction: ``(N,)`` centre error per registered latent pose, as a fraction
+            of the scene's extent (truth attribute ``extent``).
+        alignment: the fitted similarity, estimated frame to true frame.
+    """
+
+    rotation_deg: np.ndarray
+    translation_fraction: np.ndarray
+    alignment: Similarity
+
+    @property
+    def median_rotation_deg(self) -> float:
+        """Median rotation error, degrees."""
+        return float(np.median(self.rotation_deg))
+
+    @property
+    def median_translation_fraction(self) -> float:
+        """Median centre error over the scene extent."""
+        return float(np.median(self.translation_fraction))
+
+
+def compare_with_truth(poses: SessionPoses, split_us: np.ndarray, truth) -> PoseErrors:
+    """Align registered latent poses to the true poses at the same times and measure errors.
+
+    Args:
+        poses: estimated poses of a session.
+        split_us: ``(F, b+1)`` latent time points, µs.
+        truth: the session's :class:`~davis_io.emulator.Truth`.
+    """
+    registered = poses.registered.reshape(-1)
+    estimated = poses.c2w.reshape(-1, 4, 4)[registered]
+    true = truth.c2w_at(split_us.reshape(-1)[registered])
+    alignment = align_poses(estimated, true)
+    aligned = alignment.apply_poses(estimated)
+    rotation = rotation_error_deg(aligned[:, :3, :3], true[:, :3, :3])
+    distance = np.linalg.norm(aligned[:, :3, 3] - true[:, :3, 3], axis=1)
+    return PoseErrors(rotation, distance / truth.extent, alignment)
+
+
+def test_poses_from_truth(
+    truth_dir: Path | None, poses: SessionPoses, split_us: np.ndarray
+) -> np.ndarray | None:
+    """The held-out views' poses in the estimated frame, or None without truth.
+
+    The true test poses are mapped by the inverse of the similarity fitted between
+    estimated and true training poses (:func:`~davis_io.poses.align.align_poses`). This uses
+    the truth and is for evaluation only.
+    """
+    if truth_dir is None or int(poses.registered.sum()) < 3:
+        return None
+    from davis_io.emulator import load_truth
+
+    truth = load_truth(truth_dir)
+    errors = compare_with_truth(poses, split_us, truth)
+    return errors.alignment.inverse().apply_poses(truth.test_c2w)

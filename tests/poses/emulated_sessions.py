@@ -1,0 +1,25 @@
+"""Emulated sessions with truth for the pose tests and what a calibration of the camera gives."""
+
+import numpy as np
+
+from davis_io.emulator import EmulatedCamera, save_truth
+from davis_io.session.recorder import record
+
+REDUCED = {"frames": 8, "test_views": 2, "baseline_m": 0.18}
+"""The default run's emulated session: 8 views at 346 x 260 on a 4 x 2 grid of capture
+positions spread like the 16-view benchmark's 4 x 4 grid (the slow test runs that one)."""
+
+
+def calibrated_intrinsics(camera: EmulatedCamera) -> np.ndarray:
+    """A calibration of the emulated camera: its focal length, principal point at the centre."""
+    config = camera.config
+    return np.array(
+        [config.focal_px, config.focal_px, (config.width - 1) / 2, (config.height - 1) / 2]
+    )
+
+
+def record_emulated(folder, **settings):
+    camera = EmulatedCamera(**settings)
+    record(camera, folder, bins=4)
+    save_truth(camera.truth, folder / "truth")
+    return folder, calibrated_intrinsics(camera)

@@ -1,0 +1,99 @@
+import json
+
+import numpy as np
+import pytest
+from emulated_sessions import record_emulated
+
+from davis_io.cli import main
+from davis_io.emulator import load_truth
+from davis_io.errors import UsageError
+from davis_io.poses import ColmapError, estimate_poses
+from davis_io.poses.estimate import read_intrinsics
+from davis_io.poses.truth import compare_with_truth
+from davis_io.session import Session
+
+
+@pytest.fixture(scope="module")
+def estimated(emulated_session):
+    folder, intrinsics = emulated_session
+    report = estimate_poses(folder, b=4, intrinsics=intrinsics, force=True)
+    return folder, report
+
+
+def test_emulated_session_meets_the_pose_acceptance(estimated):
+    folder, report = estimated
+    assert report.total == 8 * 5
+    assert report.registered_fraction >= 0.95
+    with Session.open(folder) as session:
+        poses, split_us = session.poses(4), session.bins(4).split_us
+        truth = load_truth(session.truth_dir)
+    errors = compare_with_truth(poses, split_us, truth)
+    print(report.summary(), errors.median_rotation_deg, errors.median_translation_fraction)
+    assert errors.median_rotation_deg < 1.0
+    assert errors.median_translation_fraction < 0.02
+    # Stored poses are proper rigid transforms and unregistered ones are flagged.
+    rotations = poses.c2w[..., :3, :3]
+    assert np.allclose(rotations @ np.swapaxes(rotations, -1, -2), np.eye(3), atol=1e-6)
+    assert poses.registered.sum() == report.registered
+    assert 0 < poses.bounds[0] < poses.bounds[1]
+    assert np.allclose(poses.intrinsics, [280, 280, 172.5, 129.5])  # held fixed
+
+
+@pytest.mark.slow
+def test_full_benchmark_session_meets_the_pose_acceptance(tmp_path):
+    # The benchmark session: 16 views x 5 latent frames at 346 x 260, the emulator's defaults.
+    folder, intrinsics = record_emulated(tmp_path / "room16", frames=16, test_views=2)
+    report = estimate_poses(folder, b=4, intrinsics=intrinsics)
+    assert report.registered_fraction >= 0.95
+    with Session.open(folder) as session:
+        errors = compare_with_truth(
+            session.poses(4), session.bins(4).split_us, load_truth(session.truth_dir)
+        )
+    assert errors.median_rotation_deg < 1.0
+    assert errors.median_translation_fraction < 0.02
+
+
+def test_report_has_tracks_and_test_views(estimated):
+    folder, report = estimated
+    assert report.track_counts.shape == (8, 5)
+    assert np.all(report.track_counts[report.track_counts > 0] >= 30)
+    assert 0 < report.reprojection_error_px < 2.0
+    assert report.strategy == report.tried[-1]
+    assert report.test_c2w.shape == (2, 4, 4)
+    assert (folder / "colmap" / "database.db").exists()
+    saved = json.loads((folder / "colmap" / "report.json").read_text())
+    assert saved["registered"] == report.registered
+
+
+def test_stored_poses_are_reused_without_force(estimated):
+    folder, report = estimated
+    again = estimate_poses(folder, b=4)  # returns the stored report, COLMAP does not run
+    assert again.registered == report.registered
+    assert np.array_equal(again.track_counts, report.track_counts)
+
+
+def test_poses_verb_prints_the_report(estimated, capsys):
+    folder, report = estimated
+    assert main(["poses", str(folder), "--bins", "4"]) == 0  # stored poses: no COLMAP run
+    out = capsys.readouterr().out
+    assert f"registered {report.registered}/40 latent frames" in out
+    assert "tracks per view:" in out
+
+
+def test_textureless_session_fails_with_advice(textureless_session, capsys):
+    with pytest.raises(ColmapError, match="texture"):
+        estimate_poses(textureless_session, b=4)
+    assert main(["poses", str(textureless_session)]) == 1
+    err = capsys.readouterr().err
+    assert "seecap poses:" in err and "Traceback" not in err and "texture" in err
+
+
+def test_read_intrinsics(tmp_path):
+    (tmp_path / "k.json").write_text('{"fx": 280, "fy": 281, "cx": 172.5, "cy": 129.5}')
+    (tmp_path / "k.txt").write_text("280 281\n172.5 129.5\n")
+    assert np.allclose(read_intrinsics(tmp_path / "k.json"), [280, 281, 172.5, 129.5])
+    assert np.allclose(read_intrinsics(tmp_path / "k.txt"), [280, 281, 172.5, 129.5])
+    (tmp_path / "bad.txt").write_text("280 -1 3")
+    for bad in ("bad.txt", "missing.json"):
+        with pytest.raises(UsageError):
+            read_intrinsics(tmp_path / bad)

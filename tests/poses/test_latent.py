@@ -1,0 +1,56 @@
+import cv2
+import numpy as np
+import pytest
+
+from davis_io.errors import UsageError
+from davis_io.poses.latent import ResponseCurve, latent_images, sharpness
+from davis_io.types import ColorFilter, Frame
+
+
+def frame_of(image, bit_depth=10):
+    return Frame(image, 0, 100, 0, 120, bit_depth=bit_depth)
+
+
+def test_mono_latent_frames_without_events_are_the_frame_in_8_bit():
+    image = np.array([[0, 1023], [511, 100]], np.uint16)
+    images = latent_images(
+        frame_of(image), np.zeros((2, 2, 2)), [0.25, 0.5, 0.25], 0.3, ColorFilter.MONO
+    )
+    # 8-bit value = round(code / 1023 * 255): 0, 255, 127 (127.38), 25 (24.93).
+    assert len(images) == 3
+    assert all(np.array_equal(im, [[0, 255], [127, 25]]) for im in images)
+
+
+def test_bayer_mosaic_is_demosaiced_after_the_edi():
+    mosaic = np.zeros((4, 4), np.uint8)
+    mosaic[0::2, 0::2] = 200  # every red site lit: an RGGB mosaic of a pure red scene
+    counts = np.zeros((1, 4, 4))
+    counts[0, 0::2, 0::2] = np.log(2) / 0.3  # red sites double their brightness in the bin
+    first, last = latent_images(frame_of(mosaic, 8), counts, [0.5, 0.5], 0.3, ColorFilter.RGGB)
+    assert first.shape == (4, 4, 3)
+    # L_0 = 200 / (0.5 + 0.5 * 2) = 133.3, L_1 = 266.7 -> clipped to 255 when written.
+    assert first[1, 1, 0] == 133 and last[1, 1, 0] == 255
+    assert first[1, 1, 2] == 0  # no blue anywhere
+    with pytest.raises(UsageError, match="demosaiced"):
+        latent_images(frame_of(mosaic, 8), counts, [0.5, 0.5], 0.3, ColorFilter.RGBW)
+
+
+def test_response_curve_runs_the_edi_on_linear_values():
+    exposure = np.linspace(0, 4, 401)
+    curve = ResponseCurve(exposure, np.sqrt(exposure / 4))  # value = sqrt(x / 4)
+    assert curve.to_linear(np.array([0.5]))[0] == pytest.approx(1.0, abs=1e-3)
+    # Blurry value 0.5 -> linear 1; one bin doubling: L_0 = 1 / 1.5, L_1 = 4/3 (linear)
+    # -> values sqrt(1/6) = 0.408 and sqrt(1/3) = 0.577, i.e. 104 and 147 in 8 bits.
+    image = np.full((1, 1), 0.5 * 255, np.float64).round().astype(np.uint8)
+    counts = np.full((1, 1, 1), np.log(2) / 0.3)
+    first, last = latent_images(
+        frame_of(image, 8), counts, [0.5, 0.5], 0.3, ColorFilter.MONO, curve
+    )
+    assert abs(int(first[0, 0]) - 104) <= 1 and abs(int(last[0, 0]) - 147) <= 1
+
+
+def test_sharpness_prefers_the_sharp_image():
+    rng = np.random.default_rng(0)
+    sharp = (rng.random((64, 64)) * 255).astype(np.uint8)
+    assert sharpness(sharp) > sharpness(cv2.GaussianBlur(sharp, (7, 7), 2)) > 0
+    assert sharpness(np.full((8, 8), 9, np.uint8)) == 0
