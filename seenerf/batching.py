@@ -1,0 +1,123 @@
+"""Random pixel batches of training frames (all b+1 poses per pixel) and of the oracle's truth."""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from seenerf.data import TrainingData
+from seenerf.model import RayBatch
+from seenerf.rays import camera_rays
+
+__all__ = ["FrameSampler", "OracleSampler"]
+
+
+class FrameSampler:
+    """Draws pixels of the blurry training frames, a share of them where events fired.
+
+    Args:
+        data: the training arrays.
+        frames: indices of the frames to train on.
+        event_share: fraction of each batch drawn among pixels with at least one event.
+        calibrated: batches carry the h()-calibrated counts (True) or the raw integer counts.
+        exclude: flat indices ``position_in_frames * H * W + pixel`` never drawn (validation).
+        device: torch device.
+    """
+
+    def __init__(
+        self,
+        data: TrainingData,
+        frames: np.ndarray,
+        event_share: float = 0.5,
+        calibrated: bool = True,
+        exclude: np.ndarray | None = None,
+        device: str = "cpu",
+    ):
+        self.height, self.width = data.image_size
+        self.frames = torch.as_tensor(frames, dtype=torch.long)
+        self.ldr = torch.as_tensor(data.ldr, device=device)
+        self.exposure_s = torch.as_tensor(data.exposure_s, device=device)
+        self.weights = torch.as_tensor(data.weights, device=device)
+        self.c2w = torch.as_tensor(data.c2w, device=device)
+        self.intrinsics = torch.as_tensor(data.intrinsics, device=device)
+        self.mix = torch.as_tensor(data.mix, device=device).reshape(-1, 3)
+        self.channel = torch.as_tensor(data.channel, device=device).reshape(-1)
+        self.bins = torch.as_tensor(data.bins if calibrated else data.bins_raw, device=device)
+        self.device = device
+        allowed = np.ones(len(frames) * self.height * self.width, bool)
+        allowed[np.asarray(exclude if exclude is not None else [], np.int64)] = False
+        active = np.abs(data.bins_raw[frames]).sum(axis=1).reshape(-1) > 0
+        self.pool = torch.as_tensor(np.flatnonzero(allowed), dtype=torch.long)
+        self.event_pool = torch.as_tensor(np.flatnonzero(allowed & active), dtype=torch.long)
+        self.event_share = event_share if len(self.event_pool) else 0.0
+
+    def sample(self, count: int, generator: torch.Generator) -> RayBatch:
+        """``count`` random pixels of random training frames."""
+        from_events = int(round(count * self.event_share))
+        uniform = self.pool[
+            torch.randint(len(self.pool), (count - from_events,), generator=generator)
+        ]
+        picks = (
+            self.event_pool[
+                torch.randint(len(self.event_pool), (from_events,), generator=generator)
+            ]
+            if from_events
+            else uniform[:0]
+        )
+        return self.batch_flat(torch.cat([uniform, picks]))
+
+    def batch_flat(self, flat: torch.Tensor) -> RayBatch:
+        """The :class:`RayBatch` of flat indices ``position_in_frames * H * W + pixel``."""
+        pixels = self.height * self.width
+        return self.batch(self.frames[flat // pixels], flat % pixels)
+
+    def batch(self, frame: torch.Tensor, pixel: torch.Tensor) -> RayBatch:
+        """The :class:`RayBatch` of given frame indices and flat pixel indices."""
+        frame, pixel = frame.to(self.device), pixel.to(self.device)
+        v = torch.div(pixel, self.width, rounding_mode="floor")
+        u = pixel % self.width
+        c2w = self.c2w[frame]
+        poses = c2w.shape[1]
+        origins, directions = camera_rays(
+            c2w.reshape(-1, 4, 4),
+            self.intrinsics,
+            u.repeat_interleave(poses).float(),
+            v.repeat_interleave(poses).float(),
+        )
+        return RayBatch(
+            origins.reshape(-1, poses, 3),
+            directions.reshape(-1, poses, 3),
+            self.weights[frame],
+            self.exposure_s[frame],
+            self.mix[pixel],
+            self.channel[pixel],
+            self.ldr[frame, v, u],
+            self.bins[frame, :, v, u],
+        )
+
+
+class OracleSampler:
+    """Draws sharp truth HDR pixels of the training views at their true poses.
+
+    Args:
+        c2w: ``(F, S, 4, 4)`` true poses; ``hdr`` ``(F, S, H, W, 3)`` sharp HDR.
+        intrinsics: fx, fy, cx, cy.
+    """
+
+    def __init__(
+        self, c2w: np.ndarray, hdr: np.ndarray, intrinsics: np.ndarray, device: str = "cpu"
+    ):
+        self.c2w = torch.as_tensor(c2w, dtype=torch.float32, device=device).reshape(-1, 4, 4)
+        self.hdr = torch.as_tensor(hdr, dtype=torch.float32, device=device)
+        self.hdr = self.hdr.reshape(-1, *self.hdr.shape[-3:])
+        self.intrinsics = torch.as_tensor(intrinsics, dtype=torch.float32, device=device)
+        self.scale = float(self.hdr.max())
+
+    def sample(self, count: int, generator: torch.Generator):
+        """``(origins, directions, hdr)`` of ``count`` random truth pixels."""
+        images, height, width = self.hdr.shape[:3]
+        flat = torch.randint(images * height * width, (count,), generator=generator)
+        image, pixel = flat // (height * width), flat % (height * width)
+        v, u = pixel // width, pixel % width
+        origins, directions = camera_rays(self.c2w[image], self.intrinsics, u.float(), v.float())
+        return origins, directions, self.hdr[image, v, u]

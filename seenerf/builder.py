@@ -1,0 +1,94 @@
+"""Builds the model of a (preset, variant) pair for one scene: box, field size, sensor parts."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import torch
+
+from seenerf.config import FitConfig
+from seenerf.data import TrainingData
+from seenerf.errors import ConfigError
+from seenerf.model import SeeNerfModel
+from seenerf.presets import Preset, get_preset, size_field
+from seenerf.radiance import RadianceRenderer
+from seenerf.rays import SceneBox, in_any_view, scene_box_from_cameras
+from seenerf.variants import LOW_PASS_READINGS, get_variant
+
+__all__ = ["build_model", "resolve_device", "training_poses"]
+
+
+def resolve_device(name: str) -> str:
+    """``auto`` becomes ``cuda`` when a CUDA device is present, else ``cpu``.
+
+    Raises:
+        ConfigError: ``cuda`` was asked for and none is present.
+    """
+    if name == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    if name == "cuda" and not torch.cuda.is_available():
+        raise ConfigError(
+            "device cuda was requested but torch sees no CUDA device; use --device cpu"
+        )
+    return name
+
+
+def training_poses(data: TrainingData, config: FitConfig) -> np.ndarray:
+    """Poses the field is trained at: estimated latent poses, or the truth's for the oracle.
+
+    Raises:
+        ConfigError: the oracle needs truth, the multi-exposure variant several exposures.
+    """
+    variant = get_variant(config.variant)
+    if variant.supervision == "sharp-hdr":
+        if data.truth is None:
+            raise ConfigError("variant oracle needs ground truth (an emulated session with truth/)")
+        return data.truth.c2w
+    if variant.supervision == "multi-exposure" and len(np.unique(data.exposure_s)) < 2:
+        raise ConfigError(
+            "variant multi-exposure needs frames of at least two exposures; this session has "
+            f"one ({float(data.exposure_s[0]):g} s): record with several exposures"
+        )
+    return data.c2w
+
+
+def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[SeeNerfModel, Preset]:
+    """The model and the preset resized for this scene (field resolution from extent and sensor)."""
+    variant = get_variant(config.variant)
+    poses = training_poses(data, config)
+    box: SceneBox = scene_box_from_cameras(poses, data.intrinsics, data.bounds, data.image_size)
+    median_depth = float(np.sqrt(data.bounds[0] * data.bounds[1]))
+    preset = size_field(
+        get_preset(config.preset), box.size, median_depth, float(data.intrinsics[0])
+    )
+    renderer = RadianceRenderer(preset.field, preset.field_args, preset.sampler, box)
+    if renderer.grid is not None:
+        renderer.grid.restrict_to_views(
+            lambda points: torch.as_tensor(
+                in_any_view(
+                    box.to_world(points).numpy(),
+                    poses[:, :: max(1, poses.shape[1] - 1)],
+                    data.intrinsics,
+                    data.bounds,
+                    data.image_size,
+                )
+            )
+        )
+    spec = variant.events
+    if spec is not None and spec.delay == "mlp":
+        spec = dataclasses.replace(spec, **LOW_PASS_READINGS[config.low_pass])
+    model = SeeNerfModel(
+        renderer,
+        variant,
+        spec,
+        float(data.bounds[0]),
+        float(data.bounds[1]),
+        float(np.median(data.exposure_s)),
+        crf_args={
+            "anchor_log_exposure": config.anchor_log_exposure,
+            "anchor_value": config.anchor_value,
+        },
+        event_args={"threshold": config.threshold, "cutoff_hz": config.cutoff_hz},
+    )
+    return model.to(device), preset

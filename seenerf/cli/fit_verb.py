@@ -1,0 +1,120 @@
+"""``seecap fit``: poses if missing, See-NeRF training, renders and scores of a session."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from davis_io.errors import UsageError
+from davis_io.units import parse_duration_us
+
+__all__ = ["HELP", "add_arguments", "parse_budget_s", "run"]
+
+HELP = "fit See-NeRF to a session (poses if missing): sharp HDR renders, LDR brackets, scores"
+
+
+def parse_budget_s(text: str) -> float:
+    """Seconds of a budget: ``10m``, ``1.5h``, ``90s``, ``90`` or what ``parse_duration_us`` reads.
+
+    Raises:
+        UsageError: not a positive duration.
+    """
+    text = str(text).strip()
+    for suffix, seconds in (("min", 60.0), ("h", 3600.0), ("m", 60.0)):
+        if text.endswith(suffix) and not text.endswith("ms"):
+            try:
+                value = float(text[: -len(suffix)]) * seconds
+            except ValueError:
+                break
+            if value > 0:
+                return value
+            break
+    return parse_duration_us(text, what="--time-budget") / 1e6
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the verb's arguments."""
+    parser.add_argument("session", type=Path, help="session folder")
+    parser.add_argument(
+        "--preset",
+        default="fast",
+        help="training preset: fast (default), balanced, or paper (the published 8x256 MLP)",
+    )
+    parser.add_argument(
+        "--variant",
+        default="full",
+        help="model variant: full (default) or a "
+        "comparison (no-events, base, oracle, ...; an unknown name lists them)",
+    )
+    parser.add_argument(
+        "--time-budget",
+        type=parse_budget_s,
+        default=0.0,
+        metavar="DURATION",
+        help="stop training after this long, poses included (10m, 600s)",
+    )
+    parser.add_argument("--steps", type=int, default=0, help="training steps (default: preset's)")
+    parser.add_argument("--device", default="auto", help="auto (CUDA when present), cpu or cuda")
+    parser.add_argument(
+        "--bins", type=int, default=0, help="event bins per exposure b (default: the session's)"
+    )
+    parser.add_argument(
+        "--low-pass",
+        default="reference",
+        help="delay filter reading: reference "
+        "(first order on log radiance) or paper (second order on radiance)",
+    )
+    parser.add_argument("--run", default=None, help="run folder name under session/fit/")
+    parser.add_argument("--fresh", action="store_true", help="start over instead of resuming")
+    parser.add_argument("--seed", type=int, default=0, help="random seed")
+    parser.add_argument("--threads", type=int, default=0, help="CPU threads (default: torch's)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fit, print the scores; return 0."""
+    from seenerf.config import FitConfig
+    from seenerf.fit import fit_session
+
+    if args.steps < 0:
+        raise UsageError("--steps must be >= 0")
+    config = FitConfig(
+        preset=args.preset,
+        variant=args.variant,
+        steps=args.steps,
+        time_budget_s=args.time_budget,
+        device=args.device,
+        bins=args.bins,
+        low_pass=args.low_pass,
+        seed=args.seed,
+        threads=args.threads,
+    )
+    result = fit_session(args.session, config, run_name=args.run, fresh=args.fresh)
+    print(f"run: {result.run_dir}")
+    print(format_scores(result.metrics))
+    return 0
+
+
+def format_scores(metrics: dict) -> str:
+    """One line per score of a ``metrics.json`` payload (the shared printout of fit and eval)."""
+    lines = []
+    if "hdr" in metrics:
+        lines.append(
+            f"HDR (tone-mapped, scale-aligned): PSNR {metrics['hdr']['psnr']:.2f} dB  "
+            f"SSIM {metrics['hdr']['ssim']:.4f}"
+        )
+        lines.append(
+            f"HDR (tone-mapped, unaligned):     PSNR {metrics['hdr_unaligned']['psnr']:.2f} dB"
+        )
+        novel = metrics["novel_exposure"]
+        lines.append(
+            f"novel exposures (2nd, 4th):       PSNR {novel['psnr']:.2f} dB  "
+            f"SSIM {novel['ssim']:.4f}"
+        )
+        for exposure, score in metrics.get("ldr", {}).items():
+            lines.append(
+                f"  LDR {exposure:>8} s: PSNR {score['psnr']:.2f} dB  SSIM {score['ssim']:.4f}"
+            )
+    else:
+        lines.append("no ground truth: renders written, nothing scored")
+    lines.append(f"render: {metrics.get('render_s_per_view', float('nan')):.2f} s per view")
+    return "\n".join(lines)

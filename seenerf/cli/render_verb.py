@@ -1,0 +1,40 @@
+"""``seecap render``: render a fitted run at chosen exposures along a camera path."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+__all__ = ["HELP", "add_arguments", "run"]
+
+HELP = "render a fitted run: HDR EXR + LDR PNGs at chosen exposures, held-out views or a path"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the verb's arguments."""
+    parser.add_argument("run_dir", type=Path, metavar="RUN", help="run folder session/fit/<run>")
+    parser.add_argument(
+        "--exposure",
+        type=float,
+        nargs="+",
+        default=(),
+        metavar="SECONDS",
+        help="LDR exposures in seconds (default: the five of the bracket)",
+    )
+    parser.add_argument(
+        "--path",
+        default=None,
+        metavar="FILE|orbit",
+        help="camera path: orbit, a transforms.json or a .npy of (N, 4, 4) OpenCV "
+        "poses (default: the held-out views)",
+    )
+    parser.add_argument("--out", default="path", help="output folder name inside the run")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Render; print where; return 0."""
+    from seenerf.runs import render_run
+
+    out = render_run(args.run_dir, tuple(args.exposure), args.path, args.out)
+    print(f"renders: {out}")
+    return 0

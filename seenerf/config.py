@@ -1,0 +1,131 @@
+"""The resolved configuration of one fit, saved with every run (``config.json``)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from seenerf.errors import ConfigError
+from seenerf.presets import PRESETS
+from seenerf.variants import LOW_PASS_READINGS, VARIANTS
+
+__all__ = ["FitConfig", "load_config", "save_config"]
+
+
+@dataclass
+class FitConfig:
+    """How to fit one session. Field docstrings double as CLI help.
+
+    Attributes:
+        preset: training preset (``fast``, ``balanced``, ``paper``).
+        variant: model variant (``full`` is the paper's method).
+        steps: training steps; 0 uses the preset's count.
+        time_budget_s: stop training after this many seconds, poses included (0 = no budget).
+        device: ``auto`` (CUDA when present), ``cpu`` or ``cuda``.
+        seed: seed of every random draw.
+        bins: event bins per exposure b; 0 uses the session's default.
+        low_pass: reading of the delay filter: ``reference`` (first order on log radiance) or
+            ``paper`` (second order on linear radiance).
+        event_weight: lambda of eq. 15.
+        anchor_weight: weight of the CRF anchor term.
+        anchor_log_exposure: ln(radiance x s) of the CRF anchor point.
+        anchor_value: LDR value of the CRF at the anchor point.
+        threshold: event contrast threshold Theta.
+        cutoff_hz: photoreceptor cut-off frequency of the delay filter.
+        event_share: fraction of each batch drawn among pixels with events.
+        validation_share: fraction of training pixels held out for the progress PSNR.
+        exposures_s: exposures of the rendered LDR brackets (empty: the truth's or the
+            paper's five).
+        threads: torch CPU threads (0: torch's default).
+        batch_pixels: blurry pixels per step (0: the preset's).
+        warm_steps: CRF warm-start steps (-1: the preset's, the reference's 500).
+    """
+
+    preset: str = "fast"
+    variant: str = "full"
+    steps: int = 0
+    time_budget_s: float = 0.0
+    device: str = "auto"
+    seed: int = 0
+    bins: int = 0
+    low_pass: str = "reference"
+    event_weight: float = 0.005
+    anchor_weight: float = 0.5
+    anchor_log_exposure: float = 0.0
+    anchor_value: float = 0.5
+    threshold: float = 0.3
+    cutoff_hz: float = 150.0
+    event_share: float = 0.5
+    validation_share: float = 0.01
+    exposures_s: tuple[float, ...] = ()
+    threads: int = 0
+    batch_pixels: int = 0
+    warm_steps: int = -1
+
+    def validate(self) -> FitConfig:
+        """Check names and ranges; return self.
+
+        Raises:
+            ConfigError: naming the field, the value and the accepted values.
+        """
+        for name, table in (
+            ("preset", PRESETS),
+            ("variant", VARIANTS),
+            ("low_pass", LOW_PASS_READINGS),
+        ):
+            if getattr(self, name) not in table:
+                raise ConfigError(
+                    f"{name} {getattr(self, name)!r} is unknown; choose one of: {', '.join(table)}"
+                )
+        if self.device not in ("auto", "cpu", "cuda"):
+            raise ConfigError(f"device {self.device!r} is unknown; choose auto, cpu or cuda")
+        if self.steps < 0 or self.time_budget_s < 0 or self.bins < 0:
+            raise ConfigError("steps, time budget and bins must be >= 0")
+        if not 0 <= self.event_share <= 1 or not 0 <= self.validation_share < 0.5:
+            raise ConfigError("event_share must be in [0, 1] and validation_share in [0, 0.5)")
+        if self.threshold <= 0 or self.cutoff_hz <= 0:
+            raise ConfigError("threshold and cutoff_hz must be > 0")
+        return self
+
+    def training_key(self) -> dict:
+        """The fields a checkpoint must agree with to be resumed (not budget or steps)."""
+        keep = (
+            "preset",
+            "variant",
+            "seed",
+            "bins",
+            "low_pass",
+            "event_weight",
+            "anchor_weight",
+            "anchor_log_exposure",
+            "anchor_value",
+            "threshold",
+            "cutoff_hz",
+            "event_share",
+            "batch_pixels",
+        )
+        return {name: getattr(self, name) for name in keep}
+
+
+def save_config(config: FitConfig, path: Path, extra: dict | None = None) -> None:
+    """Write the config (and resolved extras such as the field size) as JSON."""
+    payload = {"config": dataclasses.asdict(config), **(extra or {})}
+    path.write_text(json.dumps(payload, indent=2, default=str) + "\n")
+
+
+def load_config(path: Path) -> FitConfig:
+    """Read a ``config.json`` written by :func:`save_config`.
+
+    Raises:
+        ConfigError: the file is missing or not a seecap fit config.
+    """
+    try:
+        values = json.loads(Path(path).read_text())["config"]
+        values["exposures_s"] = tuple(values.get("exposures_s", ()))
+        return FitConfig(**values).validate()
+    except (OSError, KeyError, TypeError, json.JSONDecodeError) as error:
+        raise ConfigError(
+            f"{path}: not a readable fit config ({error}); re-run seecap fit"
+        ) from error

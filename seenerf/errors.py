@@ -1,0 +1,23 @@
+"""Typed errors of the See-NeRF trainer; each message says what was wrong, where, and what to do."""
+
+from __future__ import annotations
+
+from davis_io.errors import DavisIOError
+
+__all__ = ["CheckpointError", "ConfigError", "SeeNerfError", "TrainingDataError"]
+
+
+class SeeNerfError(DavisIOError):
+    """Base of every error raised on purpose by ``seenerf`` (caught by the ``seecap`` CLI)."""
+
+
+class ConfigError(SeeNerfError):
+    """A preset, variant or configuration value is unknown or out of range."""
+
+
+class TrainingDataError(SeeNerfError):
+    """Session arrays have the wrong shape, dtype or range for training."""
+
+
+class CheckpointError(SeeNerfError):
+    """A run folder or checkpoint is missing or does not match its configuration."""

@@ -1,0 +1,126 @@
+"""Image metrics (PSNR, SSIM) and scoring of rendered test views against the truth."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+import torch.nn.functional as F  # noqa: N812
+
+__all__ = ["align_channel_scale", "hdr_metrics", "ldr_metrics", "psnr", "ssim", "tone_map_pair"]
+
+
+def psnr(predicted: np.ndarray, truth: np.ndarray, data_range: float = 1.0) -> float:
+    """Peak signal-to-noise ratio in dB; ``inf`` for identical images."""
+    mse = float(np.mean((np.asarray(predicted, np.float64) - np.asarray(truth, np.float64)) ** 2))
+    return math.inf if mse == 0 else 10.0 * math.log10(data_range**2 / mse)
+
+
+def _gaussian_window(size: int = 11, sigma: float = 1.5) -> torch.Tensor:
+    offsets = torch.arange(size, dtype=torch.float64) - (size - 1) / 2
+    kernel = torch.exp(-(offsets**2) / (2 * sigma**2))
+    kernel = kernel / kernel.sum()
+    return (kernel[:, None] * kernel[None, :])[None, None]
+
+
+def ssim(predicted: np.ndarray, truth: np.ndarray, data_range: float = 1.0) -> float:
+    """Structural similarity (Wang et al. 2004): Gaussian window 11, sigma 1.5, K1 0.01, K2 0.03.
+
+    Args:
+        predicted: ``(H, W)`` or ``(H, W, C)`` image.
+        truth: reference image of the same shape.
+        data_range: value range (1 for images in [0, 1]).
+
+    Returns:
+        Mean SSIM over the valid (unpadded) window positions and channels; images smaller than
+        the window use the largest odd window that fits.
+    """
+    a = torch.as_tensor(np.asarray(predicted, np.float64))
+    b = torch.as_tensor(np.asarray(truth, np.float64))
+    if a.ndim == 2:
+        a, b = a[..., None], b[..., None]
+    a, b = a.permute(2, 0, 1)[:, None], b.permute(2, 0, 1)[:, None]
+    size = min(11, a.shape[-2], a.shape[-1])
+    window = _gaussian_window(size - (1 - size % 2))
+    c1, c2 = (0.01 * data_range) ** 2, (0.03 * data_range) ** 2
+
+    def blur(x: torch.Tensor) -> torch.Tensor:
+        return F.conv2d(x, window)
+
+    mu_a, mu_b = blur(a), blur(b)
+    var_a = blur(a * a) - mu_a**2
+    var_b = blur(b * b) - mu_b**2
+    cov = blur(a * b) - mu_a * mu_b
+    index = ((2 * mu_a * mu_b + c1) * (2 * cov + c2)) / (
+        (mu_a**2 + mu_b**2 + c1) * (var_a + var_b + c2)
+    )
+    return float(index.mean())
+
+
+def align_channel_scale(predicted: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """Per-channel scale ``median(truth / predicted)``: radiance is known up to the CRF anchor.
+
+    Args:
+        predicted: ``(..., C)`` linear HDR.
+        truth: reference HDR of the same shape.
+
+    Returns:
+        ``(C,)`` factors to multiply the prediction by.
+    """
+    pred = predicted.reshape(-1, predicted.shape[-1]).astype(np.float64)
+    true = truth.reshape(-1, truth.shape[-1]).astype(np.float64)
+    valid = (pred > 1e-12) & (true > 0)
+    ratios = [
+        np.median(true[valid[:, c], c] / pred[valid[:, c], c]) if valid[:, c].any() else 1.0
+        for c in range(pred.shape[1])
+    ]
+    return np.asarray(ratios)
+
+
+def tone_map_pair(predicted: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The open HDR protocol's tone map of a prediction and its truth.
+
+    Both are divided by the truth's maximum, the prediction is clipped to [0, 1], then
+    ``ln(1 + 5000 x) / ln(5001)`` is applied.
+    """
+    scale = float(truth.max()) if truth.max() > 0 else 1.0
+    pred = np.clip(predicted / scale, 0.0, 1.0)
+    true = np.clip(truth / scale, 0.0, None)
+    tone = math.log(5001.0)
+    return np.log1p(5000.0 * pred) / tone, np.log1p(5000.0 * true) / tone
+
+
+def hdr_metrics(predicted: list[np.ndarray], truth: list[np.ndarray], align: bool) -> dict:
+    """Mean tone-mapped PSNR and SSIM over views, optionally after one per-channel scale.
+
+    Args:
+        predicted: linear HDR views ``(H, W, C)``.
+        truth: reference views of the same shapes.
+        align: fit one per-channel scale over all views first.
+    """
+    if not predicted:
+        return {"psnr": math.nan, "ssim": math.nan, "views": 0}
+    scale = align_channel_scale(np.stack(predicted), np.stack(truth)) if align else 1.0
+    pairs = [tone_map_pair(p * scale, t) for p, t in zip(predicted, truth, strict=True)]
+    return {
+        "psnr": float(np.mean([psnr(p, t) for p, t in pairs])),
+        "ssim": float(np.mean([ssim(p, t) for p, t in pairs])),
+        "views": len(pairs),
+        "scale": np.atleast_1d(scale).tolist(),
+    }
+
+
+def ldr_metrics(predicted: list[np.ndarray], truth: list[np.ndarray]) -> dict:
+    """Mean PSNR and SSIM of LDR images in [0, 1]."""
+    if not predicted:
+        return {"psnr": math.nan, "ssim": math.nan, "views": 0}
+    return {
+        "psnr": float(
+            np.mean([psnr(np.clip(p, 0, 1), t) for p, t in zip(predicted, truth, strict=True)])
+        ),
+        "ssim": float(
+            np.mean([ssim(np.clip(p, 0, 1), t) for p, t in zip(predicted, truth, strict=True)])
+        ),
+        "views": len(predicted),
+    }

@@ -1,0 +1,100 @@
+"""A factorised (vector-matrix) field for CPUs: three feature planes times three feature lines."""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F  # noqa: N812
+from torch import nn
+
+__all__ = ["VectorMatrixField", "sample_vector_matrix"]
+
+_PLANE_AXES = ([0, 1], [0, 2], [1, 2])
+_LINE_AXIS = [2, 1, 0]
+
+
+def sample_vector_matrix(
+    planes: torch.Tensor, lines: torch.Tensor, points: torch.Tensor
+) -> torch.Tensor:
+    """Sum over the three axis pairs of plane(u, v) * line(w), bilinear/linear interpolated.
+
+    Args:
+        planes: ``(3, C, N, N)`` features on the xy, xz and yz planes.
+        lines: ``(3, C, N, 1)`` features along z, y and x.
+        points: ``(P, 3)`` box coordinates in ``[-1, 1]``.
+
+    Returns:
+        ``(P, C)`` features.
+    """
+    plane_uv = torch.stack([points[:, axes] for axes in _PLANE_AXES])
+    line_w = points[:, _LINE_AXIS].T
+    line_uv = torch.stack([torch.zeros_like(line_w), line_w], dim=-1)
+    plane_features = F.grid_sample(planes, plane_uv[:, None], align_corners=True)
+    line_features = F.grid_sample(lines, line_uv[:, None], align_corners=True)
+    return (plane_features * line_features).sum(dim=0)[:, 0].T
+
+
+def _factors(channels: int, resolution: int, generator: torch.Generator, scale: float):
+    planes = scale * torch.randn(3, channels, resolution, resolution, generator=generator)
+    lines = scale * torch.randn(3, channels, resolution, 1, generator=generator)
+    return nn.Parameter(planes), nn.Parameter(lines)
+
+
+class VectorMatrixField(nn.Module):
+    """Density and log radiance from vector-matrix factorised features and a tiny decoder.
+
+    Density and appearance have separate factors, so density alone (for the occupancy grid and
+    the first rendering stage) costs a fraction of a full query.
+
+    Args:
+        resolution: plane side and line length N, sized from the scene and the sensor.
+        density_rank: feature channels of the density.
+        appearance_rank: feature channels feeding the radiance decoder.
+        hidden: width of the radiance decoder's hidden layer.
+    """
+
+    def __init__(
+        self,
+        resolution: int = 128,
+        density_rank: int = 8,
+        appearance_rank: int = 24,
+        hidden: int = 64,
+    ):
+        super().__init__()
+        generator = torch.Generator().manual_seed(0)
+        self.density_planes, self.density_lines = _factors(density_rank, resolution, generator, 0.1)
+        self.appearance_planes, self.appearance_lines = _factors(
+            appearance_rank, resolution, generator, 0.1
+        )
+        self.decoder = nn.Sequential(
+            nn.Linear(appearance_rank, hidden), nn.ReLU(), nn.Linear(hidden, 3)
+        )
+
+    def density(self, points: torch.Tensor) -> torch.Tensor:
+        """Density ``(P,)`` per box unit at box points ``(P, 3)``."""
+        features = sample_vector_matrix(self.density_planes, self.density_lines, points)
+        return F.softplus(features.sum(-1) * 10.0 - 3.0)
+
+    def radiance(self, points: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:
+        """Log radiance ``(P, 3)``; ``directions`` is unused (diffuse surfaces)."""
+        del directions
+        return self.decoder(
+            sample_vector_matrix(self.appearance_planes, self.appearance_lines, points)
+        )
+
+    def forward(
+        self, points: torch.Tensor, directions: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Density ``(P,)`` and log radiance ``(P, 3)``."""
+        return self.density(points), self.radiance(points, directions)
+
+    def smoothness(self) -> torch.Tensor:
+        """Mean squared difference of neighbouring plane and line texels (total variation)."""
+        total = self.density_planes.new_zeros(())
+        for planes, lines in (
+            (self.density_planes, self.density_lines),
+            (self.appearance_planes, self.appearance_lines),
+        ):
+            total = total + (planes[..., 1:, :] - planes[..., :-1, :]).square().mean()
+            total = total + (planes[..., 1:] - planes[..., :-1]).square().mean()
+            total = total + (lines[:, :, 1:] - lines[:, :, :-1]).square().mean()
+        return total

@@ -1,0 +1,61 @@
+"""Training losses: LDR (eq. 13), events (eq. 14), their sum (eq. 15) and the oracle's HDR loss."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import torch
+
+__all__ = ["LossWeights", "event_loss", "hdr_tone_map", "ldr_loss", "oracle_hdr_loss", "total_loss"]
+
+
+@dataclass(frozen=True)
+class LossWeights:
+    """Weights of the loss terms.
+
+    Attributes:
+        events: lambda of eq. 15 (0.005).
+        anchor: weight of the CRF anchor term (0.5).
+        smoothness: weight of the field's total-variation term.
+    """
+
+    events: float = 0.005
+    anchor: float = 0.5
+    smoothness: float = 0.0
+
+
+def ldr_loss(predicted: torch.Tensor, recorded: torch.Tensor) -> torch.Tensor:
+    """Mean squared error of predicted and recorded LDR values (eq. 13, mean instead of sum)."""
+    return (predicted - recorded).square().mean()
+
+
+def event_loss(predicted: torch.Tensor, measured: torch.Tensor) -> torch.Tensor:
+    """Mean over pixels and bins of the squared count error (eq. 14); zero for an empty batch."""
+    if predicted.numel() == 0:
+        return predicted.new_zeros(())
+    return (predicted - measured).square().mean()
+
+
+def hdr_tone_map(hdr: torch.Tensor, scale: torch.Tensor | float) -> torch.Tensor:
+    """Open HDR tone map ``ln(1 + 5000 x) / ln(5001)`` of ``x = hdr / scale`` (x >= 0)."""
+    return torch.log1p(5000.0 * (hdr / scale).clamp(min=0.0)) / math.log(5001.0)
+
+
+def oracle_hdr_loss(
+    log_radiance: torch.Tensor, truth_hdr: torch.Tensor, scale: float
+) -> torch.Tensor:
+    """MSE of tone-mapped rendered and true sharp HDR (the oracle's supervision)."""
+    predicted = hdr_tone_map(torch.exp(log_radiance.clamp(max=60.0)), scale)
+    return (predicted - hdr_tone_map(truth_hdr, scale)).square().mean()
+
+
+def total_loss(
+    ldr: torch.Tensor,
+    events: torch.Tensor,
+    anchor: torch.Tensor,
+    smoothness: torch.Tensor,
+    weights: LossWeights,
+) -> torch.Tensor:
+    """``L_ldr + lambda L_evs + w_anchor L_anchor + w_tv L_tv`` (eq. 15 + the reference anchor)."""
+    return ldr + weights.events * events + weights.anchor * anchor + weights.smoothness * smoothness

@@ -1,0 +1,129 @@
+"""Training presets by name: the published architecture and CPU-first settings, in one table."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from seenerf.errors import ConfigError
+from seenerf.radiance import SamplerSpec
+
+__all__ = ["PRESETS", "Preset", "get_preset", "size_field"]
+
+
+@dataclass(frozen=True)
+class Preset:
+    """Field, sampler and optimisation settings.
+
+    Attributes:
+        description: one line for ``--help``.
+        field: key of :data:`seenerf.fields.FIELDS`.
+        field_args: keyword arguments of the field (``resolution`` may be resized by
+            :func:`size_field`).
+        sampler: where rays are sampled.
+        pixels_per_step: blurry pixels per step; each is rendered from all b+1 poses.
+        steps: default step count (a time budget may stop earlier).
+        lr: Adam learning rate of the field; sensor models use ``sensor_lr``.
+        sensor_lr: Adam learning rate of the CRF and event MLPs.
+        lr_decay_steps: the rate falls by 10x every this many steps (reference 500 000).
+        smoothness: weight of the field's total-variation term (0 = none).
+        grid_every: steps between occupancy-grid refreshes.
+        eval_every: steps between held-out evaluations (progress line, early stop).
+        patience: evaluations without improvement before an early stop (0 = never).
+        max_resolution: cap of the resized field resolution.
+        warm_steps: CRF warm-start steps (reference 500).
+    """
+
+    description: str
+    field: str
+    field_args: dict = field(default_factory=dict)
+    sampler: SamplerSpec = field(default_factory=SamplerSpec)
+    pixels_per_step: int = 1024
+    steps: int = 3000
+    lr: float = 0.02
+    sensor_lr: float = 1e-3
+    lr_decay_steps: int = 10000
+    smoothness: float = 0.0
+    grid_every: int = 100
+    eval_every: int = 250
+    patience: int = 4
+    max_resolution: int = 0
+    warm_steps: int = 500
+
+
+PRESETS: dict[str, Preset] = {
+    "paper": Preset(
+        "published See-NeRF: 8x256 MLP, positional encoding 10/4, 64+128 samples, lr 5e-4",
+        field="paper-mlp",
+        sampler=SamplerSpec(kind="hierarchical", coarse=64, fine=128, density_noise=1.0),
+        pixels_per_step=1024,
+        steps=50000,
+        lr=5e-4,
+        sensor_lr=5e-4,
+        lr_decay_steps=500000,
+        eval_every=10000,
+        patience=0,
+    ),
+    "fast": Preset(
+        "CPU default: vector-matrix field, occupancy-grid sampling, minutes on 2 cores",
+        field="vector-matrix",
+        field_args={"resolution": 128, "density_rank": 8, "appearance_rank": 16, "hidden": 32},
+        sampler=SamplerSpec(
+            kind="occupancy",
+            coarse=48,
+            fine=12,
+            grid_resolution=64,
+            render_coarse=24,
+            render_fine=6,
+        ),
+        pixels_per_step=512,
+        steps=3000,
+        lr=0.02,
+        smoothness=0.05,
+        max_resolution=192,
+        grid_every=50,
+    ),
+    "balanced": Preset(
+        "CPU, more capacity and samples than fast: about 3x the time for finer detail",
+        field="vector-matrix",
+        field_args={"resolution": 192, "density_rank": 12, "appearance_rank": 24, "hidden": 64},
+        sampler=SamplerSpec(kind="occupancy", coarse=128, fine=32, grid_resolution=96),
+        pixels_per_step=1024,
+        steps=6000,
+        lr=0.02,
+        smoothness=0.02,
+        max_resolution=320,
+    ),
+}
+"""Every preset by name; ``fast`` is the default of ``seecap fit``."""
+
+
+def get_preset(name: str) -> Preset:
+    """The preset called ``name``.
+
+    Raises:
+        ConfigError: unknown name (the message lists the known ones).
+    """
+    if name not in PRESETS:
+        raise ConfigError(f"unknown preset {name!r}; choose one of: {', '.join(PRESETS)}")
+    return PRESETS[name]
+
+
+def size_field(preset: Preset, box_size: float, median_depth: float, focal_px: float) -> Preset:
+    """Set a grid field's resolution from how many sensor pixels the scene box spans.
+
+    A texel finer than a pixel at the median depth cannot be constrained by the frames, so the
+    resolution is the box's pixel span at that depth, capped by ``max_resolution``.
+
+    Args:
+        preset: a preset whose field has a ``resolution`` argument (others are returned as is).
+        box_size: side of the scene cube, world units.
+        median_depth: typical scene depth, world units.
+        focal_px: focal length in pixels.
+    """
+    if "resolution" not in preset.field_args or preset.max_resolution <= 0:
+        return preset
+    span = focal_px * box_size / max(median_depth, 1e-6)
+    resolution = int(np.clip(span, 48, preset.max_resolution))
+    return replace(preset, field_args={**preset.field_args, "resolution": resolution})

@@ -1,0 +1,137 @@
+"""Reopening a finished run: its model from ``config.json`` and the checkpoint; render, score."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from seenerf.builder import build_model, resolve_device
+from seenerf.checkpoint import load_model_state
+from seenerf.config import FitConfig, load_config
+from seenerf.data import TrainingData
+from seenerf.errors import CheckpointError
+from seenerf.export import OPENCV_TO_OPENGL, write_json
+from seenerf.fit import render_outputs
+from seenerf.model import SeeNerfModel
+from seenerf.scoring import PAPER_EXPOSURES_S, render_views, write_views
+from seenerf.session_data import load_training_data
+
+__all__ = ["OpenRun", "evaluate_run", "open_run", "orbit_poses", "read_path", "render_run"]
+
+
+@dataclass
+class OpenRun:
+    """A run's model (weights loaded), its training data and configuration."""
+
+    run_dir: Path
+    model: SeeNerfModel
+    data: TrainingData
+    config: FitConfig
+
+
+def open_run(run_dir: Path | str) -> OpenRun:
+    """Rebuild the model of ``session/fit/<run>/``.
+
+    Raises:
+        CheckpointError: no config or checkpoint in the folder.
+    """
+    run_dir = Path(run_dir)
+    if not (run_dir / "checkpoint.pt").exists() or not (run_dir / "config.json").exists():
+        raise CheckpointError(
+            f"{run_dir}: not a fit run (config.json and checkpoint.pt expected); "
+            "run seecap fit first"
+        )
+    config = load_config(run_dir / "config.json")
+    bins = json.loads((run_dir / "config.json").read_text()).get("bins", config.bins)
+    data = load_training_data(run_dir.parent.parent, int(bins))
+    model, _ = build_model(data, config, resolve_device(config.device))
+    load_model_state(run_dir / "checkpoint.pt", model)
+    return OpenRun(run_dir, model, data, config)
+
+
+def orbit_poses(data: TrainingData, count: int = 60) -> np.ndarray:
+    """A circle of ``count`` poses through the training cameras' spread, looking at their target.
+
+    The circle lies in the plane of the camera centres' two main directions, centred on their
+    mean, with the radius of their spread; every camera looks along the mean viewing direction.
+    """
+    centres = data.c2w[:, 0, :3, 3].astype(np.float64)
+    mean = centres.mean(axis=0)
+    _, spread, axes = np.linalg.svd(centres - mean)
+    radius = max(float(spread[0]) / np.sqrt(max(len(centres), 1)), 1e-3)
+    rotation = np.mean(data.c2w[:, 0, :3, :3], axis=0)
+    u, _, vt = np.linalg.svd(rotation)
+    rotation = u @ vt
+    angles = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    poses = np.tile(np.eye(4), (count, 1, 1))
+    poses[:, :3, :3] = rotation
+    poses[:, :3, 3] = mean + radius * (
+        np.cos(angles)[:, None] * axes[0] + np.sin(angles)[:, None] * axes[1]
+    )
+    return poses.astype(np.float32)
+
+
+def read_path(path: Path) -> np.ndarray:
+    """Camera path from a ``transforms.json`` (OpenGL axes) or a ``.npy`` of OpenCV ``(N, 4, 4)``.
+
+    Raises:
+        CheckpointError: unreadable file or wrong shape.
+    """
+    try:
+        if path.suffix == ".json":
+            frames = json.loads(path.read_text())["frames"]
+            poses = np.array([f["transform_matrix"] for f in frames], float) @ OPENCV_TO_OPENGL
+        else:
+            poses = np.load(path, allow_pickle=False)
+    except (OSError, KeyError, ValueError) as error:
+        raise CheckpointError(f"{path}: not a camera path ({error})") from error
+    if poses.ndim != 3 or poses.shape[1:] != (4, 4):
+        raise CheckpointError(f"{path}: camera path must hold (N, 4, 4) poses, got {poses.shape}")
+    return poses.astype(np.float32)
+
+
+def render_run(
+    run_dir: Path | str,
+    exposures_s: tuple[float, ...] = (),
+    path: str | None = None,
+    out_name: str = "path",
+) -> Path:
+    """Render a run along a camera path (``orbit``, a file, or the held-out views if None)."""
+    run = open_run(run_dir)
+    if path is None:
+        render_outputs(run.model, run.data, run.config, run.run_dir)
+        return run.run_dir / "renders"
+    poses = orbit_poses(run.data) if path == "orbit" else read_path(Path(path))
+    exposures = exposures_s or run.config.exposures_s or PAPER_EXPOSURES_S
+    views = render_views(
+        run.model,
+        poses,
+        run.data.intrinsics,
+        run.data.image_size,
+        tuple(exposures),
+        monochrome=False,
+    )
+    out_dir = run.run_dir / out_name
+    write_views(
+        views,
+        out_dir,
+        run.data.intrinsics,
+        run.data.image_size,
+        {"seecap_variant": run.config.variant, "seecap_path": str(path)},
+    )
+    return out_dir
+
+
+def evaluate_run(run_dir: Path | str) -> dict:
+    """Re-render the held-out views of a run, score them, update ``metrics.json``."""
+    run = open_run(run_dir)
+    metrics_path = run.run_dir / "metrics.json"
+    previous = json.loads(metrics_path.read_text()) if metrics_path.exists() else {}
+    metrics = render_outputs(run.model, run.data, run.config, run.run_dir)
+    if "training" in previous:
+        metrics["training"] = previous["training"]
+    write_json(metrics_path, metrics)
+    return metrics

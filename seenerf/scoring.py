@@ -1,0 +1,162 @@
+"""Renders a fitted model's views, writes them, and scores them against the truth when known."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from davis_io.poses.align import Similarity
+from seenerf.data import TrainingData
+from seenerf.evaluate import align_channel_scale, hdr_metrics, ldr_metrics
+from seenerf.export import (
+    crf_plot,
+    tone_mapped_preview,
+    transforms_json,
+    write_exr,
+    write_json,
+    write_png,
+)
+from seenerf.model import SeeNerfModel
+from seenerf.views import IDENTITY, render_log_image, truth_to_fit_frame
+
+__all__ = [
+    "PAPER_EXPOSURES_S",
+    "RenderedViews",
+    "plot_crf",
+    "render_views",
+    "score_views",
+    "test_poses_in_fit_frame",
+    "write_views",
+]
+
+PAPER_EXPOSURES_S = (0.001, 0.004, 0.016, 0.064, 0.256)
+"""The paper's LDR bracket, used when neither the config nor the truth names exposures."""
+
+_LUMINANCE = np.array([0.2126, 0.7152, 0.0722], np.float32)
+
+
+@dataclass
+class RenderedViews:
+    """Rendered views in the fit's frame.
+
+    Attributes:
+        c2w: ``(V, 4, 4)`` poses rendered (fit frame).
+        hdr: linear HDR images ``(H, W, C)``; ``ldr[e]`` the images at ``exposures_s[e]``.
+        render_s: seconds per view.
+    """
+
+    c2w: np.ndarray
+    exposures_s: tuple[float, ...]
+    hdr: list[np.ndarray] = field(default_factory=list)
+    ldr: list[list[np.ndarray]] = field(default_factory=list)
+    render_s: float = 0.0
+
+
+@torch.no_grad()
+def render_views(
+    model: SeeNerfModel,
+    c2w: np.ndarray,
+    intrinsics: np.ndarray,
+    image_size: tuple[int, int],
+    exposures_s: tuple[float, ...],
+    monochrome: bool,
+) -> RenderedViews:
+    """HDR and LDR images of each pose; a monochrome sensor's views are luminance ``(H, W, 1)``."""
+    model.eval()
+    views = RenderedViews(np.asarray(c2w), tuple(exposures_s), ldr=[[] for _ in exposures_s])
+    start = time.perf_counter()
+    for pose in views.c2w:
+        log_image = torch.as_tensor(render_log_image(model, pose, intrinsics, image_size))
+        if monochrome:
+            hdr = model.hdr_from_log(log_image).numpy() @ _LUMINANCE
+            log_lum = torch.log(torch.as_tensor(hdr).clamp(min=1e-30))[..., None].expand(-1, -1, 3)
+            views.hdr.append(hdr[..., None])
+            for index, exposure in enumerate(exposures_s):
+                views.ldr[index].append(model.ldr_from_log(log_lum, exposure)[..., :1].numpy())
+        else:
+            views.hdr.append(model.hdr_from_log(log_image).numpy())
+            for index, exposure in enumerate(exposures_s):
+                views.ldr[index].append(model.ldr_from_log(log_image, exposure).numpy())
+    views.render_s = (time.perf_counter() - start) / max(len(views.c2w), 1)
+    return views
+
+
+def score_views(views: RenderedViews, data: TrainingData) -> dict:
+    """PSNR / SSIM of HDR (tone-mapped, per-channel scale aligned and raw) and of each LDR exposure.
+
+    The novel-exposure score is the mean over the bracket's second and fourth exposures (the
+    paper's protocol); ``ldr_all`` averages all five.
+    """
+    test = data.test
+    truth_hdr = list(test.hdr)
+    scores = {
+        "hdr": hdr_metrics(views.hdr, truth_hdr, align=True),
+        "hdr_unaligned": hdr_metrics(views.hdr, truth_hdr, align=False),
+        "ldr": {},
+    }
+    for index, exposure in enumerate(views.exposures_s):
+        scores["ldr"][f"{exposure:g}"] = ldr_metrics(views.ldr[index], list(test.ldr[:, index]))
+    novel = [
+        scores["ldr"][f"{views.exposures_s[i]:g}"] for i in (1, 3) if i < len(views.exposures_s)
+    ]
+    scores["novel_exposure"] = {
+        "psnr": float(np.mean([m["psnr"] for m in novel])) if novel else float("nan"),
+        "ssim": float(np.mean([m["ssim"] for m in novel])) if novel else float("nan"),
+    }
+    scores["render_s_per_view"] = views.render_s
+    return scores
+
+
+def write_views(
+    views: RenderedViews,
+    run_dir: Path,
+    intrinsics: np.ndarray,
+    image_size: tuple[int, int],
+    metadata: dict,
+) -> None:
+    """EXR + tone-mapped PNG per view, LDR PNGs per exposure, and ``transforms.json``."""
+    names = []
+    for index, hdr in enumerate(views.hdr):
+        name = f"{index:03d}"
+        write_exr(run_dir / "renders" / "hdr" / f"{name}.exr", hdr, metadata)
+        write_png(run_dir / "renders" / "hdr" / f"{name}.png", tone_mapped_preview(hdr))
+        for exposure, images in zip(views.exposures_s, views.ldr, strict=True):
+            write_png(run_dir / "renders" / "ldr" / f"{exposure:g}" / f"{name}.png", images[index])
+        names.append(f"renders/hdr/{name}.png")
+    write_json(
+        run_dir / "transforms.json", transforms_json(views.c2w, intrinsics, image_size, names)
+    )
+
+
+def test_poses_in_fit_frame(
+    data: TrainingData, trained_in_truth_frame: bool
+) -> tuple[np.ndarray, Similarity]:
+    """Test poses mapped into the fit's frame, or each frame's first latent pose without truth."""
+    if data.test is None:
+        return data.c2w[:, 0], IDENTITY
+    similarity = IDENTITY if trained_in_truth_frame else truth_to_fit_frame(data)
+    return similarity.apply_poses(data.test.c2w).astype(np.float32), similarity
+
+
+def plot_crf(model: SeeNerfModel, data: TrainingData, views: RenderedViews, path: Path) -> None:
+    """The learned response beside the true one; the learned curve is shifted by the HDR scale."""
+    if model.crf is None:
+        return
+    log_exposure = np.linspace(-8.0, 6.0, 141, dtype=np.float32)
+    with torch.no_grad():
+        values = model.crf(torch.as_tensor(log_exposure)[:, None].expand(-1, 3)).numpy()
+    shift = 0.0
+    if data.test is not None and views.hdr:
+        scale = align_channel_scale(np.stack(views.hdr), data.test.hdr)
+        shift = float(np.log(np.mean(scale)))
+    truth = data.truth
+    true = (
+        (truth.crf_log_exposure, truth.crf_value)
+        if truth is not None and len(truth.crf_value)
+        else None
+    )
+    crf_plot(path, (log_exposure + shift, values), true)

@@ -1,0 +1,122 @@
+"""The pixel-wise RGB response (eq. 7): three 1->128->1 MLPs on ln(radiance x s), sigmoid out."""
+
+from __future__ import annotations
+
+import math
+
+import torch
+import torch.nn.functional as F  # noqa: N812
+from torch import nn
+
+__all__ = ["PowerCrf", "RgbCrf", "apply_power_crf", "apply_rgb_crf", "warm_start_target"]
+
+
+def apply_rgb_crf(
+    log_exposure: torch.Tensor,
+    weight_in: torch.Tensor,
+    bias_in: torch.Tensor,
+    weight_out: torch.Tensor,
+    bias_out: torch.Tensor,
+) -> torch.Tensor:
+    """LDR value of each channel from its own one-hidden-layer MLP.
+
+    Args:
+        log_exposure: ``(..., 3)`` ln(radiance) + ln(exposure seconds) per channel.
+        weight_in: ``(3, K)`` first-layer weights.
+        bias_in: ``(3, K)`` first-layer biases.
+        weight_out: ``(3, K)`` second-layer weights.
+        bias_out: ``(3,)`` second-layer biases.
+
+    Returns:
+        ``(..., 3)`` LDR values in (0, 1).
+    """
+    hidden = torch.relu(log_exposure[..., None] * weight_in + bias_in)
+    return torch.sigmoid((hidden * weight_out).sum(-1) + bias_out)
+
+
+def apply_power_crf(log_exposure: torch.Tensor, exponent: torch.Tensor) -> torch.Tensor:
+    """EvHDR-GS response ``min(x^a, 1)``, x = radiance x seconds, one exponent for all channels."""
+    return torch.exp(exponent * log_exposure).clamp(max=1.0)
+
+
+def warm_start_target(x: torch.Tensor) -> torch.Tensor:
+    """The reference warm-start curve ``clip(ln(1 + e^x), 0, 1)``."""
+    return F.softplus(x).clamp(0.0, 1.0)
+
+
+class RgbCrf(nn.Module):
+    """Three per-channel response MLPs with the reference warm start and anchor term.
+
+    Args:
+        hidden: hidden width K (128).
+        anchor_log_exposure: ln(radiance x seconds) of the anchor point (0: unit exposure).
+        anchor_value: LDR value the anchor must map to (0.5).
+        seed: initialisation seed.
+    """
+
+    def __init__(
+        self,
+        hidden: int = 128,
+        anchor_log_exposure: float = 0.0,
+        anchor_value: float = 0.5,
+        seed: int = 0,
+    ):
+        super().__init__()
+        generator = torch.Generator().manual_seed(seed)
+        # PyTorch's default Linear initialisation: U(-1/sqrt(fan_in), 1/sqrt(fan_in)).
+        self.weight_in = nn.Parameter(torch.rand(3, hidden, generator=generator) * 2 - 1)
+        self.bias_in = nn.Parameter(torch.rand(3, hidden, generator=generator) * 2 - 1)
+        bound = 1.0 / math.sqrt(hidden)
+        self.weight_out = nn.Parameter((torch.rand(3, hidden, generator=generator) * 2 - 1) * bound)
+        self.bias_out = nn.Parameter((torch.rand(3, generator=generator) * 2 - 1) * bound)
+        self.anchor_log_exposure = anchor_log_exposure
+        self.anchor_value = anchor_value
+
+    def forward(self, log_exposure: torch.Tensor) -> torch.Tensor:
+        """See :func:`apply_rgb_crf`."""
+        return apply_rgb_crf(
+            log_exposure, self.weight_in, self.bias_in, self.weight_out, self.bias_out
+        )
+
+    def anchor_loss(self) -> torch.Tensor:
+        """Squared error of CRF(anchor) against the anchor value, mean over the three channels."""
+        point = self.weight_in.new_full((3,), self.anchor_log_exposure)
+        return (self(point) - self.anchor_value).square().mean()
+
+    def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
+        """Fit ``clip(softplus(x), 0, 1)`` on x ~ U[-3, 3] with its own Adam; return last loss."""
+        return warm_start_module(self, steps, lr, seed, channels=3)
+
+
+class PowerCrf(nn.Module):
+    """Module form of :func:`apply_power_crf`; the exponent starts at 1/2.2."""
+
+    def __init__(self, anchor_log_exposure: float = 0.0, anchor_value: float = 0.5):
+        super().__init__()
+        self.exponent = nn.Parameter(torch.tensor(1 / 2.2))
+
+    def forward(self, log_exposure: torch.Tensor) -> torch.Tensor:
+        """See :func:`apply_power_crf`."""
+        return apply_power_crf(log_exposure, self.exponent)
+
+    def anchor_loss(self) -> torch.Tensor:
+        """The power curve has no free offset to anchor; zero."""
+        return self.exponent.new_zeros(())
+
+    def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
+        """Nothing to warm up."""
+        return 0.0
+
+
+def warm_start_module(module: nn.Module, steps: int, lr: float, seed: int, channels: int) -> float:
+    """Adam on ``module`` alone towards :func:`warm_start_target`; mean L2 norm of the error."""
+    generator = torch.Generator().manual_seed(seed)
+    optimizer = torch.optim.Adam(module.parameters(), lr=lr)
+    loss = torch.zeros(())
+    for _ in range(steps):
+        x = torch.rand(1024, channels, generator=generator) * 6.0 - 3.0
+        loss = (module(x) - warm_start_target(x)).norm(dim=-1).mean()
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+    return float(loss.detach())

@@ -1,0 +1,260 @@
+"""The training loop: batches, losses, Adam, occupancy refresh, progress, checkpoints, stops."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from seenerf.batching import FrameSampler, OracleSampler
+from seenerf.builder import build_model, resolve_device
+from seenerf.checkpoint import load_checkpoint, save_checkpoint
+from seenerf.config import FitConfig
+from seenerf.data import TrainingData
+from seenerf.evaluate import psnr
+from seenerf.losses import LossWeights, event_loss, ldr_loss, oracle_hdr_loss, total_loss
+
+__all__ = ["TrainSummary", "Trainer"]
+
+GRID_WARMUP_STEPS = 50
+"""Steps before the first occupancy refresh (the field is still blank before)."""
+
+
+@dataclass
+class TrainSummary:
+    """What a training run did.
+
+    Attributes:
+        steps: steps completed (including resumed ones).
+        elapsed_s: training seconds (including resumed ones).
+        stopped: ``steps``, ``budget`` or ``plateau``.
+        best_psnr: best held-out LDR PSNR of the progress evaluations, dB.
+        rays_per_s: rendered rays per second over this process's steps.
+        samples_per_ray: mean field queries per ray in the last step.
+        skipped_steps: steps whose loss was not finite (no update made).
+        history: progress records (step, losses, PSNR, rate).
+    """
+
+    steps: int = 0
+    elapsed_s: float = 0.0
+    stopped: str = "steps"
+    best_psnr: float = -math.inf
+    rays_per_s: float = 0.0
+    samples_per_ray: float = 0.0
+    skipped_steps: int = 0
+    history: list = field(default_factory=list)
+
+
+class Trainer:
+    """Trains one model on one scene.
+
+    Args:
+        data: training arrays.
+        config: the fit configuration.
+        run_dir: folder for the checkpoint (None: no checkpoints).
+        log: receives every progress line.
+        spent_s: seconds already spent by the caller (poses) against the time budget.
+    """
+
+    def __init__(
+        self,
+        data: TrainingData,
+        config: FitConfig,
+        run_dir: Path | None = None,
+        log: Callable[[str], None] = print,
+        spent_s: float = 0.0,
+    ):
+        self.data, self.config, self.run_dir, self.log = data, config.validate(), run_dir, log
+        if config.threads > 0:
+            torch.set_num_threads(config.threads)
+        self.device = resolve_device(config.device)
+        torch.manual_seed(config.seed)
+        self.model, preset = build_model(data, config, self.device)
+        self.preset = dataclasses.replace(
+            preset,
+            pixels_per_step=config.batch_pixels or preset.pixels_per_step,
+            warm_steps=preset.warm_steps if config.warm_steps < 0 else config.warm_steps,
+        )
+        self.generator = torch.Generator().manual_seed(config.seed)
+        self.total_steps = config.steps or self.preset.steps
+        self.spent_s = spent_s
+        self.weights = LossWeights(
+            config.event_weight, config.anchor_weight, self.preset.smoothness
+        )
+        self._make_samplers()
+        field_params = list(self.model.renderer.parameters())
+        sensor_params = [
+            p for name, p in self.model.named_parameters() if not name.startswith("renderer.")
+        ]
+        self.optimizer = torch.optim.Adam(
+            [
+                {"params": field_params, "lr": self.preset.lr},
+                {"params": sensor_params, "lr": self.preset.sensor_lr},
+            ],
+            betas=(0.9, 0.999),
+        )
+        self.summary = TrainSummary()
+        self.evals_since_best = 0
+
+    def _make_samplers(self) -> None:
+        data, rng = self.data, np.random.default_rng(self.config.seed)
+        frames = np.arange(data.num_frames)
+        pixels = data.image_size[0] * data.image_size[1]
+        count = int(round(self.config.validation_share * len(frames) * pixels))
+        self.validation = torch.as_tensor(np.sort(rng.choice(len(frames) * pixels, count, False)))
+        events = self.model.variant.events
+        self.frames = FrameSampler(
+            data,
+            frames,
+            self.config.event_share,
+            events is None or events.calibrated,
+            self.validation.numpy(),
+            self.device,
+        )
+        self.oracle = None
+        if self.model.variant.supervision == "sharp-hdr":
+            truth = data.truth
+            self.oracle = OracleSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, self.device)
+
+    def train(self) -> TrainSummary:
+        """Run (or resume) training until the step count, the time budget or a plateau."""
+        resumed = self._resume()
+        if not resumed:
+            self.model.warm_start(self.preset.warm_steps, self.config.seed)
+        start, start_step, rays = time.perf_counter(), self.summary.steps, 0
+        base_elapsed = self.summary.elapsed_s
+        while self.summary.steps < self.total_steps:
+            rays += self._step()
+            self.summary.steps += 1
+            self.summary.elapsed_s = base_elapsed + time.perf_counter() - start
+            if self._budget_left() <= 0:
+                self.summary.stopped = "budget"
+                break
+            if self.summary.steps % self.preset.eval_every == 0 and self._evaluate(
+                start_step, start
+            ):
+                self.summary.stopped = "plateau"
+                break
+        self.summary.rays_per_s = rays / max(time.perf_counter() - start, 1e-9)
+        self._checkpoint()
+        return self.summary
+
+    def _budget_left(self) -> float:
+        if self.config.time_budget_s <= 0:
+            return math.inf
+        return self.config.time_budget_s - self.spent_s - self.summary.elapsed_s
+
+    def _step(self) -> int:
+        step = self.summary.steps
+        self._set_learning_rate(step)
+        if (
+            self.model.renderer.grid is not None
+            and step >= GRID_WARMUP_STEPS
+            and step % self.preset.grid_every == 0
+        ):
+            self.model.renderer.grid.update(self.model.renderer.density, self.generator)
+        loss, terms, rays, samples = self._loss()
+        self.optimizer.zero_grad(set_to_none=True)
+        if not torch.isfinite(loss):
+            self.summary.skipped_steps += 1
+            return rays
+        loss.backward()
+        self.optimizer.step()
+        self.summary.samples_per_ray = samples / max(rays, 1)
+        self.last_terms = terms
+        return rays
+
+    def _loss(self) -> tuple[torch.Tensor, dict, int, int]:
+        model, zero = self.model, torch.zeros((), device=self.device)
+        smooth_fn = getattr(model.renderer.fields[0], "smoothness", None)
+        smooth = smooth_fn() if smooth_fn is not None and self.weights.smoothness > 0 else zero
+        if self.oracle is not None:
+            origins, directions, hdr = self.oracle.sample(
+                self.preset.pixels_per_step * (self.data.num_bins + 1), self.generator
+            )
+            passes = model.renderer(
+                origins, directions, model.near, model.far, None, self.generator
+            )
+            ldr = sum(oracle_hdr_loss(p.values, hdr, self.oracle.scale) for p in passes)
+            loss = total_loss(ldr, zero, zero, smooth, self.weights)
+            return loss, {"hdr": float(ldr.detach())}, len(origins), passes[-1].num_samples
+        batch = self.frames.sample(self.preset.pixels_per_step, self.generator)
+        predictions = model(batch, self.generator)
+        ldr = sum(ldr_loss(p.ldr, batch.ldr) for p in predictions)
+        events = sum(
+            (event_loss(p.counts, batch.bins) for p in predictions if p.counts is not None), zero
+        )
+        anchor = model.crf.anchor_loss() if model.crf is not None else zero
+        loss = total_loss(ldr, events, anchor, smooth, self.weights)
+        rays = batch.origins.shape[0] * batch.origins.shape[1]
+        terms = {
+            "ldr": float(ldr.detach()),
+            "events": float(events.detach()),
+            "anchor": float(anchor.detach()),
+        }
+        return loss, terms, rays, predictions[-1].num_samples
+
+    def _set_learning_rate(self, step: int) -> None:
+        factor = 0.1 ** (step / self.preset.lr_decay_steps)
+        for group, base in zip(
+            self.optimizer.param_groups, (self.preset.lr, self.preset.sensor_lr), strict=True
+        ):
+            group["lr"] = base * factor
+
+    @torch.no_grad()
+    def validation_psnr(self) -> float:
+        """LDR PSNR of the held-out training pixels (blurry reproduction), dB."""
+        if len(self.validation) == 0:
+            return math.nan
+        predicted = []
+        for chunk in self.validation.split(2048):
+            batch = self.frames.batch_flat(chunk)
+            predicted.append((self.model(batch)[-1].ldr.cpu(), batch.ldr.cpu()))
+        return psnr(
+            torch.cat([p for p, _ in predicted]).numpy(),
+            torch.cat([t for _, t in predicted]).numpy(),
+        )
+
+    def _evaluate(self, start_step: int, start: float) -> bool:
+        value = self.validation_psnr()
+        rate = (self.summary.steps - start_step) / max(time.perf_counter() - start, 1e-9)
+        remaining = (self.total_steps - self.summary.steps) / max(rate, 1e-9)
+        eta = min(remaining, self._budget_left())
+        terms = getattr(self, "last_terms", {})
+        self.log(
+            f"step {self.summary.steps}/{self.total_steps}  "
+            + "  ".join(f"{k} {v:.4g}" for k, v in terms.items())
+            + f"  val PSNR {value:.2f} dB  {rate:.2f} steps/s  ETA {eta:.0f} s"
+        )
+        self.summary.history.append(
+            {
+                "step": self.summary.steps,
+                **terms,
+                "val_psnr": value,
+                "steps_per_s": rate,
+                "elapsed_s": self.summary.elapsed_s,
+            }
+        )
+        if value > self.summary.best_psnr + 0.05:
+            self.summary.best_psnr, self.evals_since_best = value, 0
+        else:
+            self.evals_since_best += 1
+        self._checkpoint()
+        return 0 < self.preset.patience <= self.evals_since_best
+
+    def _checkpoint(self) -> None:
+        if self.run_dir is not None:
+            save_checkpoint(self.run_dir / "checkpoint.pt", self)
+
+    def _resume(self) -> bool:
+        if self.run_dir is None or not (self.run_dir / "checkpoint.pt").exists():
+            return False
+        load_checkpoint(self.run_dir / "checkpoint.pt", self)
+        self.log(f"resuming at step {self.summary.steps} from {self.run_dir / 'checkpoint.pt'}")
+        return True

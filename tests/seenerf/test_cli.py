@@ -1,0 +1,49 @@
+import json
+import subprocess
+import sys
+
+import pytest
+
+from davis_io.cli import VERBS
+from davis_io.errors import UsageError
+from seenerf.cli.fit_verb import format_scores, parse_budget_s
+from seenerf.config import FitConfig
+from seenerf.fit import fit_data
+
+
+def test_budget_parsing():
+    assert parse_budget_s("10m") == 600
+    assert parse_budget_s("1.5h") == 5400
+    assert parse_budget_s("90") == 90
+    assert parse_budget_s("250ms") == pytest.approx(0.25)
+    with pytest.raises(UsageError):
+        parse_budget_s("soon")
+
+
+def test_verbs_are_registered_and_import_without_torch():
+    assert VERBS["fit"] == "seenerf.cli.fit_verb"
+    code = (
+        "import sys, seenerf, seenerf.cli.fit_verb, seenerf.cli.render_verb, "
+        "seenerf.cli.eval_verb; print('torch' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_fit_writes_every_output(tiny_scene, tmp_path):
+    config = FitConfig(steps=3, batch_pixels=8, warm_steps=2, validation_share=0.1)
+    result = fit_data(tiny_scene, config, tmp_path / "run", log=lambda line: None)
+    run = result.run_dir
+    exposures = [f"{e:g}" for e in tiny_scene.test.exposures_s]
+    assert (run / "renders" / "hdr" / "000.exr").exists()
+    assert (run / "renders" / "hdr" / "000.png").exists()
+    assert all((run / "renders" / "ldr" / e / "000.png").exists() for e in exposures)
+    assert (run / "crf.png").exists() and (run / "checkpoint.pt").exists()
+    saved = json.loads((run / "config.json").read_text())
+    assert saved["config"]["steps"] == 3 and saved["field"] == "vector-matrix"
+    metrics = json.loads((run / "metrics.json").read_text())
+    assert metrics["training"]["steps"] == 3
+    assert set(metrics["ldr"]) == set(exposures)
+    transforms = json.loads((run / "transforms.json").read_text())
+    assert len(transforms["frames"]) == len(tiny_scene.test.c2w)
+    assert "novel exposures" in format_scores(metrics)

@@ -1,0 +1,54 @@
+import numpy as np
+import pytest
+
+from davis_io.errors import DavisIOError
+from davis_io.types import ColorFilter
+from seenerf.data import pixel_layout
+from seenerf.errors import SeeNerfError, TrainingDataError
+from seenerf.synthetic import plane_scene
+
+
+def test_rggb_layout_picks_one_channel_per_site():
+    mix, channel = pixel_layout(ColorFilter.RGGB, 2, 4)
+    assert channel.tolist() == [[0, 1, 0, 1], [1, 2, 1, 2]]
+    assert mix[1, 1].tolist() == [0, 0, 1]
+
+
+def test_mono_layout_is_luminance_through_the_first_curve():
+    mix, channel = pixel_layout(ColorFilter.MONO, 2, 2)
+    assert mix[0, 0].tolist() == pytest.approx([0.2126, 0.7152, 0.0722])
+    assert (channel == 0).all()
+
+
+def test_validate_names_the_bad_array():
+    scene = plane_scene(height=6, width=8, frames=2, b=2, test_views=0)
+    scene.weights = scene.weights[:, :2]
+    with pytest.raises(TrainingDataError, match=r"weights has shape \(2, 2\), expected \(2, 3\)"):
+        scene.validate()
+
+
+@pytest.mark.parametrize(
+    "field, value, message",
+    [
+        ("ldr", 2.0, "divide by 1023"),
+        ("exposure_s", 0.0, "> 0 seconds"),
+    ],
+)
+def test_validate_ranges(field, value, message):
+    scene = plane_scene(height=6, width=8, frames=2, b=2, test_views=0)
+    getattr(scene, field)[0] = value
+    with pytest.raises(TrainingDataError, match=message):
+        scene.validate()
+
+
+def test_errors_are_caught_by_the_cli():
+    assert issubclass(SeeNerfError, DavisIOError)
+
+
+def test_synthetic_scene_ideal_events_match_the_latent_radiance():
+    scene = plane_scene(height=6, width=8, frames=2, b=2, test_views=0)
+    latent = scene.truth.sharp_hdr[:, ::4]
+    log_pixel = np.log((latent * scene.mix).sum(-1))
+    # bins are the log change of each pixel's own channel divided by 0.3
+    assert np.allclose(scene.bins * 0.3, np.diff(log_pixel, axis=1), atol=1e-5)
+    assert np.allclose(scene.weights.sum(1), 1.0)

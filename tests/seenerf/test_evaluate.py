@@ -1,0 +1,46 @@
+import math
+
+import numpy as np
+import pytest
+
+from seenerf.evaluate import align_channel_scale, hdr_metrics, psnr, ssim, tone_map_pair
+
+
+def test_psnr_by_hand():
+    # error 0.1 everywhere -> MSE 0.01 -> 10 log10(1 / 0.01) = 20 dB
+    assert psnr(np.full((4, 4), 0.6), np.full((4, 4), 0.5)) == pytest.approx(20.0)
+    assert psnr(np.ones(3), np.ones(3)) == math.inf
+
+
+def test_ssim_of_constant_images_by_hand():
+    # constant windows: variances and covariance vanish, SSIM = (2 ab + c1) / (a^2 + b^2 + c1)
+    a, b, c1 = 0.5, 0.25, 0.01**2
+    expected = (2 * a * b + c1) / (a * a + b * b + c1)
+    assert ssim(np.full((16, 16), a), np.full((16, 16), b)) == pytest.approx(expected, rel=1e-9)
+    image = np.random.default_rng(0).random((20, 24, 3))
+    assert ssim(image, image) == pytest.approx(1.0)
+    assert ssim(image, 1 - image) < 0
+
+
+def test_tone_map_normalises_by_truth_maximum_and_clips_prediction():
+    truth = np.array([0.0, 1.0, 2.0])
+    pred = np.array([0.0, 4.0, 2.0])  # 4 / 2 = 2 clips to 1
+    tp, tt = tone_map_pair(pred, truth)
+    # truth 1 / max 2 = 0.5 -> ln(2501) / ln(5001)
+    assert tt[1] == pytest.approx(math.log(2501) / math.log(5001))
+    assert tp[1] == pytest.approx(1.0) and tt[2] == pytest.approx(1.0)
+
+
+def test_channel_scale_alignment_recovers_white_balance():
+    rng = np.random.default_rng(1)
+    truth = rng.uniform(0.01, 100, (2, 8, 8, 3))
+    pred = truth / np.array([2.0, 3.0, 0.5])
+    assert align_channel_scale(pred, truth) == pytest.approx([2.0, 3.0, 0.5])
+    aligned = hdr_metrics(list(pred), list(truth), align=True)
+    raw = hdr_metrics(list(pred), list(truth), align=False)
+    assert aligned["psnr"] == math.inf or aligned["psnr"] > 100
+    assert raw["psnr"] < 40
+
+
+def test_empty_view_lists_score_nan():
+    assert math.isnan(hdr_metrics([], [], align=True)["psnr"])

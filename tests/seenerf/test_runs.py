@@ -1,0 +1,37 @@
+import json
+
+import numpy as np
+import pytest
+
+from seenerf.errors import CheckpointError
+from seenerf.export import OPENCV_TO_OPENGL, transforms_json
+from seenerf.runs import open_run, orbit_poses, read_path
+
+
+def test_orbit_circles_the_training_cameras(tiny_scene):
+    poses = orbit_poses(tiny_scene, count=12)
+    centres = tiny_scene.c2w[:, 0, :3, 3]
+    distances = np.linalg.norm(poses[:, :3, 3] - centres.mean(axis=0), axis=1)
+    assert poses.shape == (12, 4, 4)
+    assert np.allclose(distances, distances[0], rtol=1e-4) and distances[0] > 0
+    assert np.allclose(poses[0, :3, :3] @ poses[0, :3, :3].T, np.eye(3), atol=1e-5)
+
+
+def test_transforms_json_round_trips_as_a_camera_path(tmp_path):
+    c2w = np.tile(np.eye(4), (2, 1, 1))
+    c2w[1, :3, 3] = [1.0, 2.0, 3.0]
+    payload = transforms_json(c2w, np.array([10.0, 10.0, 4.0, 3.0]), (6, 8), ["a.png", "b.png"])
+    # OpenGL axes flip y and z of the camera
+    assert payload["frames"][0]["transform_matrix"][1][1] == -1.0
+    path = tmp_path / "transforms.json"
+    path.write_text(json.dumps(payload))
+    assert np.allclose(read_path(path), c2w)
+    assert np.allclose(OPENCV_TO_OPENGL @ OPENCV_TO_OPENGL, np.eye(4))
+
+
+def test_bad_camera_path_and_missing_run_are_typed_errors(tmp_path):
+    np.save(tmp_path / "path.npy", np.zeros((3, 3)))
+    with pytest.raises(CheckpointError, match=r"\(N, 4, 4\)"):
+        read_path(tmp_path / "path.npy")
+    with pytest.raises(CheckpointError, match="seecap fit first"):
+        open_run(tmp_path)

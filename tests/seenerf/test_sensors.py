@@ -1,0 +1,157 @@
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from seenerf.sensors.event_crf import (
+    EventCrf,
+    EventModelSpec,
+    event_log_radiance,
+    low_pass,
+    predicted_counts,
+    v2e_intensity_factor,
+)
+from seenerf.sensors.exposure import blur_log_radiance
+from seenerf.sensors.rgb_crf import (
+    PowerCrf,
+    RgbCrf,
+    apply_power_crf,
+    apply_rgb_crf,
+    warm_start_target,
+)
+
+
+def _identity_crf_weights():
+    # Hidden unit 0 passes relu(u); the output sums it: CRF(u) = sigmoid(relu(u)).
+    weight_in = torch.zeros(3, 4)
+    weight_in[:, 0] = 1.0
+    weight_out = torch.zeros(3, 4)
+    weight_out[:, 0] = 1.0
+    return weight_in, torch.zeros(3, 4), weight_out, torch.zeros(3)
+
+
+def test_known_crf_maps_known_radiance():
+    # radiance e, exposure 1 s -> u = 1 -> sigmoid(1) = 0.7310586;
+    # radiance 0.5 at 1 s -> u < 0 -> relu 0 -> 0.5.
+    u = torch.log(torch.tensor([[math.e, 0.5, math.e**2]])) + math.log(1.0)
+    out = apply_rgb_crf(u, *_identity_crf_weights())
+    assert out[0].tolist() == pytest.approx([0.7310586, 0.5, 0.8807971], abs=1e-6)
+
+
+def test_power_crf_hand_values():
+    # (0.25)^0.5 = 0.5; 4^0.5 = 2 clipped to 1.
+    out = apply_power_crf(torch.log(torch.tensor([0.25, 4.0])), torch.tensor(0.5))
+    assert out.tolist() == pytest.approx([0.5, 1.0])
+    assert PowerCrf().anchor_loss() == 0
+
+
+def test_rgb_crf_warm_start_reaches_reference_curve():
+    crf = RgbCrf(seed=3)
+    crf.warm_start(steps=500)
+    x = torch.linspace(-3, 3, 61)[:, None].expand(-1, 3)
+    error = (crf(x) - warm_start_target(x)).abs().max()
+    assert error < 0.08
+
+
+def test_anchor_loss_is_zero_for_a_curve_through_the_anchor():
+    crf = RgbCrf(anchor_log_exposure=0.0, anchor_value=0.5)
+    with torch.no_grad():
+        for p in crf.parameters():
+            p.zero_()  # sigmoid(0) = 0.5 everywhere
+    assert float(crf.anchor_loss().detach()) == 0.0
+    crf.anchor_value = 0.6
+    assert float(crf.anchor_loss().detach()) == pytest.approx(0.01, abs=1e-7)
+
+
+def test_trapezoid_exposure_integral():
+    # b = 2: weights 1/4, 1/2, 1/4 of radiance 1, 2, 4 -> 0.25 + 1 + 1 = 2.25.
+    log_e = torch.log(torch.tensor([[1.0, 2.0, 4.0]]))[..., None].expand(-1, -1, 3)
+    out = blur_log_radiance(log_e, torch.tensor([[0.25, 0.5, 0.25]]))
+    assert torch.allclose(out, torch.full((1, 3), math.log(2.25)))
+
+
+def test_exposure_integral_extreme_values_and_zero_weight_are_finite():
+    log_e = torch.tensor([[[-80.0] * 3, [80.0] * 3, [0.0] * 3]], requires_grad=True)
+    out = blur_log_radiance(log_e, torch.tensor([[0.0, 0.5, 0.5]]))
+    out.sum().backward()
+    assert torch.isfinite(out).all() and torch.isfinite(log_e.grad).all()
+    assert out[0, 0].item() == pytest.approx(80 + math.log(0.5), rel=1e-6)
+
+
+def test_low_pass_first_and_second_order_by_hand():
+    signal = torch.tensor([[0.0, 1.0, 1.0]])
+    eps = torch.tensor([[0.0, 0.5, 0.5]])
+    # s1 = 0.5 * 0 + 0.5 * 1 = 0.5; s2 = 0.5 * 0.5 + 0.5 * 1 = 0.75
+    assert low_pass(signal, eps, 1)[0].tolist() == pytest.approx([0.0, 0.5, 0.75])
+    # second stage on [0, 0.5, 0.75]: 0.25, then 0.5 * 0.25 + 0.5 * 0.75 = 0.5
+    assert low_pass(signal, eps, 2)[0].tolist() == pytest.approx([0.0, 0.25, 0.5])
+    assert low_pass(signal, eps, 0) is signal
+    # eps is clamped to [0, 1]: eps 3 behaves as 1 (no delay)
+    assert low_pass(signal, eps * 6, 1)[0].tolist() == pytest.approx([0.0, 1.0, 1.0])
+
+
+def test_predicted_counts_from_known_sequence():
+    # (0.5 - 0) / 0.3 = 1.6667, (0.75 - 0.5) / 0.3 = 0.8333
+    counts = predicted_counts(torch.tensor([[0.0, 0.5, 0.75]]), 0.3)
+    assert counts[0].tolist() == pytest.approx([5 / 3, 5 / 6])
+
+
+def test_event_pixel_sees_its_bayer_channel_or_luminance():
+    log_e = torch.log(torch.tensor([[[1.0, 2.0, 4.0]]]))
+    red = event_log_radiance(log_e, torch.tensor([[1.0, 0.0, 0.0]]))
+    assert red.item() == pytest.approx(0.0, abs=1e-6)
+    luminance = event_log_radiance(log_e, torch.tensor([[0.2126, 0.7152, 0.0722]]))
+    assert luminance.item() == pytest.approx(math.log(0.2126 + 2 * 0.7152 + 4 * 0.0722), rel=1e-6)
+
+
+def test_v2e_intensity_factor_at_unit_exposure():
+    # x = 1: (1 / 2)^(1 / 2.2) = 0.72974
+    assert v2e_intensity_factor(torch.tensor(0.0)).item() == pytest.approx(
+        0.5 ** (1 / 2.2), rel=1e-6
+    )
+
+
+def _constant_delay(crf: EventCrf, value: float) -> None:
+    with torch.no_grad():
+        for p in crf.delay.parameters():
+            p.zero_()
+        crf.delay[2].bias.fill_(math.log(value / (1 - value)))  # sigmoid(bias) = value
+
+
+def test_event_crf_reference_reading_by_hand():
+    # cutoff such that tau = 1 ms; exposure 4 ms, b = 2 -> bin 2 ms; f_ev = 0.25 -> eps = 0.5.
+    crf = EventCrf(EventModelSpec(), threshold=0.3, cutoff_hz=1 / (2 * math.pi * 1e-3))
+    _constant_delay(crf, 0.25)
+    log_e = torch.tensor([[[0.0] * 3, [1.0] * 3, [1.0] * 3]])
+    counts = crf(log_e, torch.tensor([[0.0, 1.0, 0.0]]), torch.tensor([4e-3]))
+    assert counts[0].tolist() == pytest.approx([5 / 3, 5 / 6], rel=1e-5)
+
+
+def test_event_crf_paper_reading_filters_linear_radiance():
+    crf = EventCrf(EventModelSpec(order=2, domain="linear"), cutoff_hz=1 / (2 * math.pi * 1e-3))
+    _constant_delay(crf, 0.25)
+    log_e = torch.log(torch.tensor([[[1.0] * 3, [2.0] * 3, [2.0] * 3]]))
+    counts = crf(log_e, torch.tensor([[0.0, 1.0, 0.0]]), torch.tensor([4e-3]))
+    # radiance [1, 2, 2] -> stage 1 [1, 1.5, 1.75] -> stage 2 [1, 1.25, 1.5]
+    expected = [math.log(1.25) / 0.3, math.log(1.5 / 1.25) / 0.3]
+    assert counts[0].tolist() == pytest.approx(expected, rel=1e-5)
+
+
+@pytest.mark.parametrize("bins", [1, 8])
+def test_event_crf_large_and_tiny_values_stay_finite(bins):
+    crf = EventCrf(EventModelSpec())
+    log_e = torch.linspace(-70, 70, (bins + 1) * 3).reshape(1, bins + 1, 3).requires_grad_()
+    counts = crf(log_e, torch.tensor([[0.2126, 0.7152, 0.0722]]), torch.tensor([0.256]))
+    loss = (counts - 1e4).square().mean()
+    loss.backward()
+    assert counts.shape == (1, bins) and counts.dtype == torch.float32
+    assert torch.isfinite(loss) and torch.isfinite(log_e.grad).all()
+
+
+def test_learned_colour_mix_starts_as_channel_mean():
+    crf = EventCrf(EventModelSpec(colour="learned", delay="none", order=0))
+    log_e = torch.log(torch.tensor([[[3.0, 3.0, 3.0], [6.0, 6.0, 6.0]]]))
+    counts = crf(log_e, torch.tensor([[1.0, 0.0, 0.0]]), torch.tensor([0.01]))
+    assert counts.item() == pytest.approx(math.log(2) / 0.3, rel=1e-5)
+    assert np.isfinite(counts.detach().numpy()).all()

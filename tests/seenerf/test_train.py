@@ -1,0 +1,107 @@
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from seenerf.config import FitConfig
+from seenerf.errors import CheckpointError, ConfigError
+from seenerf.presets import PRESETS
+from seenerf.synthetic import plane_scene
+from seenerf.trainer import Trainer
+from seenerf.variants import VARIANTS
+
+
+def _config(**overrides):
+    values = {"steps": 3, "batch_pixels": 6, "warm_steps": 2, "validation_share": 0.1, "threads": 2}
+    values.update(overrides)
+    return FitConfig(**values)
+
+
+def _parameters_changed(trainer, before):
+    after = [p.detach().clone() for p in trainer.model.parameters()]
+    return any(not torch.equal(a, b) for a, b in zip(before, after, strict=True))
+
+
+def _finite_step(trainer):
+    loss, terms, _, _ = trainer._loss()
+    loss.backward()
+    grads = [p.grad for p in trainer.model.parameters() if p.grad is not None]
+    trainer.optimizer.zero_grad()
+    return torch.isfinite(loss) and all(torch.isfinite(g).all() for g in grads), terms
+
+
+@pytest.mark.parametrize("preset", sorted(PRESETS))
+def test_every_preset_trains_a_few_steps(preset, tiny_scene):
+    trainer = Trainer(tiny_scene, _config(preset=preset), log=lambda line: None)
+    before = [p.detach().clone() for p in trainer.model.parameters()]
+    summary = trainer.train()
+    assert summary.steps == 3 and summary.skipped_steps == 0
+    assert _parameters_changed(trainer, before)
+
+
+@pytest.mark.parametrize("variant", sorted(set(VARIANTS) - {"multi-exposure"}))
+def test_every_variant_trains_a_few_steps(variant, tiny_scene):
+    trainer = Trainer(tiny_scene, _config(variant=variant), log=lambda line: None)
+    before = [p.detach().clone() for p in trainer.model.parameters()]
+    summary = trainer.train()
+    assert summary.steps == 3 and summary.skipped_steps == 0
+    assert _parameters_changed(trainer, before)
+
+
+def test_multi_exposure_needs_and_uses_several_exposures(tiny_scene):
+    with pytest.raises(ConfigError, match="at least two exposures"):
+        Trainer(tiny_scene, _config(variant="multi-exposure"))
+    scene = plane_scene(
+        height=8, width=10, frames=3, b=2, exposure_s=np.array([0.004, 0.016, 0.064])
+    )
+    summary = Trainer(scene, _config(variant="multi-exposure"), log=lambda line: None).train()
+    assert summary.steps == 3
+
+
+def test_oracle_needs_truth(tiny_scene):
+    scene = plane_scene(height=8, width=10, frames=3, b=2)
+    scene.truth = None
+    with pytest.raises(ConfigError, match="ground truth"):
+        Trainer(scene, _config(variant="oracle"))
+
+
+def test_unknown_names_list_the_known_ones():
+    with pytest.raises(ConfigError, match="full"):
+        _config(variant="nope").validate()
+    with pytest.raises(ConfigError, match="fast"):
+        _config(preset="nope").validate()
+
+
+def test_killed_fit_resumes_in_place(tiny_scene, tmp_path):
+    Trainer(tiny_scene, _config(steps=2), tmp_path, log=lambda line: None).train()
+    lines = []
+    resumed = Trainer(tiny_scene, _config(steps=5), tmp_path, log=lines.append)
+    assert resumed.train().steps == 5
+    assert any("resuming at step 2" in line for line in lines)
+    with pytest.raises(CheckpointError, match="--fresh"):
+        Trainer(tiny_scene, _config(steps=5, seed=1), tmp_path).train()
+
+
+def test_damaged_checkpoint_is_a_typed_error(tiny_scene, tmp_path):
+    (tmp_path / "checkpoint.pt").write_bytes(b"not a checkpoint")
+    with pytest.raises(CheckpointError, match="not a readable"):
+        Trainer(tiny_scene, _config(), tmp_path).train()
+
+
+def test_time_budget_stops_training(tiny_scene):
+    summary = Trainer(
+        tiny_scene, _config(steps=10_000, time_budget_s=0.5), log=lambda line: None
+    ).train()
+    assert summary.stopped == "budget" and summary.steps < 10_000
+
+
+def test_progress_line_reports_losses_psnr_rate_and_eta(tiny_scene):
+    lines = []
+    trainer = Trainer(tiny_scene, _config(steps=4), log=lines.append)
+    trainer.preset = type(trainer.preset)(**{**trainer.preset.__dict__, "eval_every": 2})
+    trainer.train()
+    assert len(lines) == 2
+    for part in ("step 2/4", "ldr", "events", "val PSNR", "steps/s", "ETA"):
+        assert part in lines[0]
+    assert math.isfinite(trainer.summary.history[-1]["val_psnr"])

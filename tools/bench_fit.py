@@ -1,0 +1,192 @@
+"""Benchmark of See-NeRF fits: quality per variant on emulated sessions, and speed per preset.
+
+Examples:
+    python tools/bench_fit.py --quick
+    python tools/bench_fit.py --scene room --budget 600 --variants full,no-events,base,oracle
+
+The full mode records an emulated session (``seecap record --emulate``) unless ``--session`` is
+given, estimates poses through ``seecap fit`` (or, with ``--true-poses``, stores the truth's poses
+when the pose estimator is unavailable: the report says so), fits each variant with the same time
+budget, and prints HDR and novel-exposure scores beside the training speed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from seenerf.config import FitConfig
+from seenerf.fit import ensure_poses, fit_data
+from seenerf.session_data import load_training_data
+from seenerf.synthetic import plane_scene
+from seenerf.trainer import Trainer
+
+
+def machine() -> str:
+    return (
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, torch "
+        f"{torch.__version__}, {torch.get_num_threads()} threads, "
+        f"cuda={'yes' if torch.cuda.is_available() else 'no'}"
+    )
+
+
+def rays_per_second(data, preset: str, steps: int, pixels: int) -> float:
+    config = FitConfig(
+        preset=preset, steps=steps, batch_pixels=pixels, warm_steps=0, validation_share=0.0
+    )
+    return Trainer(data, config, log=lambda line: None).train().rays_per_s
+
+
+def speed_table(data, steps: int) -> dict:
+    """Rays per second of each preset on the same data in the same process."""
+    table = {name: rays_per_second(data, name, steps, 256) for name in ("fast", "balanced")}
+    table["paper"] = rays_per_second(data, "paper", max(2, steps // 10), 32)
+    table["fast_over_paper"] = table["fast"] / table["paper"]
+    return table
+
+
+def store_true_poses(session_dir: Path, b: int) -> None:
+    """Write the truth's poses at the latent time points as the session's poses for ``b``."""
+    from davis_io.emulator.truth import load_truth
+    from davis_io.poses.align import interpolate_poses
+    from davis_io.session import Session, SessionPoses
+
+    with Session.open(session_dir) as session:
+        truth = load_truth(session.truth_dir)
+        split = session.bins(b).split_us
+        times = truth.train_time_us.reshape(-1)
+        order = np.argsort(times, kind="stable")
+        keep = np.concatenate([[True], np.diff(times[order]) > 0])
+        known = truth.train_c2w.reshape(-1, 4, 4)[order][keep]
+        latent = interpolate_poses(times[order][keep], known, split.reshape(-1))
+        near, far = truth.depth_range_m
+        session.write_poses(
+            b,
+            SessionPoses(
+                latent.reshape(*split.shape, 4, 4),
+                np.ones(split.shape, bool),
+                truth.intrinsics,
+                np.zeros(0),
+                np.array([0.9 * near, 1.1 * far]),
+            ),
+        )
+
+
+def record(scene: str, out: Path, frames: int, exposure: str) -> float:
+    start = time.perf_counter()
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "davis_io.cli",
+            "record",
+            "--emulate",
+            scene,
+            "--exposure",
+            exposure,
+            "--frames",
+            str(frames),
+            "--out",
+            str(out),
+            "--overwrite",
+        ],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
+    return time.perf_counter() - start
+
+
+def quality(
+    session_dir: Path, variants: list[str], preset: str, budget: float, b: int, true_poses: bool
+) -> dict:
+    start = time.perf_counter()
+    try:
+        ensure_poses(session_dir, b, print)
+        pose_source = "estimated"
+    except Exception as error:  # the estimator is optional here: report and fall back
+        if not true_poses:
+            raise
+        print(f"pose estimation unavailable ({error}); storing the truth's poses")
+        store_true_poses(session_dir, b)
+        pose_source = "truth"
+    poses_s = time.perf_counter() - start
+    data = load_training_data(session_dir, b)
+    results = {"pose_source": pose_source, "poses_s": poses_s}
+    for variant in variants:
+        config = FitConfig(preset=preset, variant=variant, time_budget_s=budget, steps=100_000)
+        run = fit_data(
+            data,
+            config,
+            session_dir / "fit" / f"bench-{preset}-{variant}",
+            fresh=True,
+            log=print,
+            spent_s=poses_s if variant == "full" else 0.0,
+        )
+        m = run.metrics
+        results[variant] = {
+            "hdr_psnr": m["hdr"]["psnr"],
+            "hdr_ssim": m["hdr"]["ssim"],
+            "hdr_psnr_unaligned": m["hdr_unaligned"]["psnr"],
+            "novel_psnr": m["novel_exposure"]["psnr"],
+            "novel_ssim": m["novel_exposure"]["ssim"],
+            "steps": run.summary.steps,
+            "train_s": run.summary.elapsed_s,
+            "rays_per_s": run.summary.rays_per_s,
+            "render_s_per_view": m["render_s_per_view"],
+        }
+        print(json.dumps({variant: results[variant]}))
+    return results
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="synthetic plane scene, speed only")
+    parser.add_argument("--scene", default="room")
+    parser.add_argument(
+        "--session", type=Path, help="use this emulated session instead of recording"
+    )
+    parser.add_argument("--out", type=Path, default=Path("bench-sessions"))
+    parser.add_argument("--frames", type=int, default=20)
+    parser.add_argument("--exposure", default="0.15")
+    parser.add_argument("--bins", type=int, default=4)
+    parser.add_argument("--preset", default="fast")
+    parser.add_argument("--variants", default="full,no-events,base,oracle")
+    parser.add_argument("--budget", type=float, default=600.0, help="seconds per variant")
+    parser.add_argument(
+        "--true-poses",
+        action="store_true",
+        help="store the truth's poses if the pose estimator is unavailable",
+    )
+    args = parser.parse_args()
+    torch.set_num_threads(min(2, os.cpu_count() or 1))
+    print(f"machine: {machine()}")
+    print(f"command: {' '.join(sys.argv)}")
+    if args.quick:
+        data = plane_scene(height=64, width=86, frames=6)
+        print(json.dumps({"rays_per_s": speed_table(data, steps=10)}, indent=1))
+        return 0
+    session = args.session
+    if session is None:
+        session = args.out / f"{args.scene}-{args.exposure}s"
+        print(
+            f"recorded {session} in {record(args.scene, session, args.frames, args.exposure):.0f} s"
+        )
+    results = quality(
+        session, args.variants.split(","), args.preset, args.budget, args.bins, args.true_poses
+    )
+    results["rays_per_s"] = speed_table(load_training_data(session, args.bins), steps=10)
+    print(json.dumps(results, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
