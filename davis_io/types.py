@@ -18,6 +18,7 @@ __all__ = [
     "EVENT_DTYPE",
     "IMU_DTYPE",
     "TRIGGER_DTYPE",
+    "Closing",
     "ColorFilter",
     "Frame",
     "Packet",
@@ -191,6 +192,24 @@ class SourceInfo:
     firmware_version: int | None = None
     logic_version: int | None = None
     extra: dict = field(default_factory=dict)
+
+
+class Closing:
+    """Mixin for holders of a resource: ``with`` returns the object, exit calls ``close()``."""
+
+    def close(self) -> None:
+        """Release the resource (subclasses override)."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
 
 
 @runtime_checkable

@@ -1,4 +1,4 @@
-"""Parsing of durations given on the command line (seconds by default, ``ms`` and ``us`` accepted)."""
+"""Parsing of durations given on the command line (seconds by default, ``ms`` and ``us`` too)."""
 
 from __future__ import annotations
 

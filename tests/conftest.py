@@ -13,5 +13,7 @@ AESTREAM_AEDAT4 = FIXTURES_DIR / "davis346-aestream.aedat4"
 def aestream_aedat4() -> Path:
     """The real DAVIS346 AEDAT 4.0 recording described in ``shared/fixtures/README.md``."""
     if not AESTREAM_AEDAT4.exists():
-        pytest.fail(f"fixture missing: {AESTREAM_AEDAT4} (the shared/ folder must sit beside the repo)")
+        pytest.fail(
+            f"fixture missing: {AESTREAM_AEDAT4} (the shared/ folder must sit beside the repo)"
+        )
     return AESTREAM_AEDAT4

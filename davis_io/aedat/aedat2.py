@@ -5,13 +5,13 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 from pathlib import Path
-from typing import BinaryIO, Self
+from typing import BinaryIO
 
 import numpy as np
 
 from davis_io.aedat.aedat2_frames import ApsAssembler
-from davis_io.aedat.chips import SENSOR_SIZES, identify_chip
-from davis_io.aedat.report import warn_note
+from davis_io.aedat.report import FileReader, warn_note
+from davis_io.chips import SENSOR_SIZES, identify_chip
 from davis_io.errors import FormatError
 from davis_io.types import (
     EVENT_DTYPE,
@@ -163,7 +163,7 @@ def read_header(file: BinaryIO, path: str) -> tuple[int, bytes]:
                               offset=start)
 
 
-class Aedat2Reader:
+class Aedat2Reader(FileReader):
     """An AEDAT 2.0 file as a :class:`~davis_io.types.PacketSource`.
 
     Yields one Packet per 262,144 records. The chip (and so the array size used to flip y to the
@@ -179,8 +179,7 @@ class Aedat2Reader:
         Raises:
             FormatError: empty file, wrong magic, or a chip whose size is unknown.
         """
-        self.path = Path(path)
-        self._file: BinaryIO = self.path.open("rb")
+        super().__init__(path)
         try:
             self._data_start, header = read_header(self._file, str(self.path))
             chip = re.search(rb"# AEChip: *(\S+)", header)
@@ -203,16 +202,6 @@ class Aedat2Reader:
                                color_filter=color, origin=f"replay:{self.path.name}",
                                extra={"format": "AEDAT 2.0", "chip": chip_name,
                                       "accel_full_scale_g": accel, "gyro_full_scale_dps": gyro})
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(self, *exc_info) -> None:
-        self.close()
-
-    def close(self) -> None:
-        """Close the file."""
-        self._file.close()
 
     def __iter__(self) -> Iterator[Packet]:
         decoder = Aedat2Decoder(*self._decoder_args)

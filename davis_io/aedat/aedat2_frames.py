@@ -62,16 +62,16 @@ class ApsAssembler:
         last = (x == self.width - 1) & (y == self.height - 1)
         frames, notes, done = [], [], 0
         for index in np.flatnonzero(first | last).tolist():
-            self._store(t, x, y, readout, sample, slice(done, index))
+            self._store(x, y, readout, sample, slice(done, index))
             kind = ("first" if first[index] else "last",
                     "reset" if readout[index] == 0 else "signal")
             if kind == ("first", "reset"):
                 notes += self._start(int(t[index]))
-            self._store(t, x, y, readout, sample, slice(index, index + 1))
+            self._store(x, y, readout, sample, slice(index, index + 1))
             frame = self._marker(kind, int(t[index]), notes)
             frames += [frame] if frame is not None else []
             done = index + 1
-        self._store(t, x, y, readout, sample, slice(done, len(t)))
+        self._store(x, y, readout, sample, slice(done, len(t)))
         return frames, notes
 
     def _start(self, t: int) -> list[str]:
@@ -86,7 +86,7 @@ class ApsAssembler:
         self._active = True
         return notes
 
-    def _store(self, t, x, y, readout, sample, part: slice) -> None:
+    def _store(self, x, y, readout, sample, part: slice) -> None:
         if not self._active or part.start >= part.stop:
             return
         kind, rows, cols = readout[part], y[part], x[part]

@@ -6,12 +6,12 @@ import re
 import struct
 from collections.abc import Iterator
 from pathlib import Path
-from typing import BinaryIO, Self
+from typing import BinaryIO
 
 import numpy as np
 
-from davis_io.aedat.chips import identify_chip
-from davis_io.aedat.report import warn_note
+from davis_io.aedat.report import FileReader, warn_note
+from davis_io.chips import identify_chip
 from davis_io.errors import FormatError
 from davis_io.types import EVENT_DTYPE, IMU_DTYPE, TRIGGER_DTYPE, Frame, Packet, SourceInfo
 
@@ -32,7 +32,7 @@ SPECIAL_TO_TRIGGER = {1: 0, 2: 1, 3: 2, 4: 3, 12: 4, 13: 5, 14: 6, 15: 7, 16: 8,
 """libcaer special event type -> :class:`~davis_io.types.TriggerKind` (others are dropped)."""
 
 
-class Aedat31Reader:
+class Aedat31Reader(FileReader):
     """An AEDAT 3.1 file as a :class:`~davis_io.types.PacketSource`, one Packet per file packet.
 
     Frames come back as 10-bit ``uint16`` (the file's 16-bit normalized pixels shifted right by
@@ -45,10 +45,9 @@ class Aedat31Reader:
         Raises:
             FormatError: empty file, wrong magic or no end-of-header line.
         """
-        self.path = Path(path)
-        self._file_size = self.path.stat().st_size
-        self._file: BinaryIO = self.path.open("rb")
+        super().__init__(path)
         try:
+            self._file_size = self.path.stat().st_size
             self._data_start, sources = _read_header(self._file, str(self.path))
         except BaseException:
             self._file.close()
@@ -57,16 +56,6 @@ class Aedat31Reader:
         self.info = SourceInfo(camera=model, serial="", width=width, height=height,
                                origin=f"replay:{self.path.name}",
                                extra={"format": "AEDAT 3.1", "sources": sources})
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(self, *exc_info) -> None:
-        self.close()
-
-    def close(self) -> None:
-        """Close the file."""
-        self._file.close()
 
     def __iter__(self) -> Iterator[Packet]:
         self._file.seek(self._data_start)

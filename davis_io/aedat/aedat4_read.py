@@ -5,7 +5,6 @@ from __future__ import annotations
 import struct
 from collections.abc import Iterator
 from pathlib import Path
-from typing import BinaryIO, Self
 
 import numpy as np
 import zstandard
@@ -26,7 +25,7 @@ from davis_io.aedat.aedat4_streams import (
     decode_imu,
     decode_triggers,
 )
-from davis_io.aedat.report import warn_note
+from davis_io.aedat.report import FileReader, warn_note
 from davis_io.errors import FormatError
 from davis_io.types import Packet, SourceInfo
 
@@ -37,7 +36,7 @@ _CODEC_ERRORS = (RuntimeError, ValueError, zstandard.ZstdError)
 _FRAME_SLACK_US = 10_000_000  # a frame's table stamp (DV: exposure midpoint) is at most this late
 
 
-class Aedat4Reader:
+class Aedat4Reader(FileReader):
     """An AEDAT 4.0 file as a :class:`~davis_io.types.PacketSource`.
 
     The header is read on construction (so ``info`` is known at once); iteration walks the
@@ -55,23 +54,12 @@ class Aedat4Reader:
         Raises:
             FormatError: empty file, wrong magic, or a malformed header.
         """
-        self.path = Path(path)
-        self._file: BinaryIO = self.path.open("rb")
+        super().__init__(path)
         try:
             self._read_header()
         except BaseException:
             self._file.close()
             raise
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(self, *exc_info) -> None:
-        self.close()
-
-    def close(self) -> None:
-        """Close the file."""
-        self._file.close()
 
     @property
     def time_range(self) -> tuple[int, int] | None:

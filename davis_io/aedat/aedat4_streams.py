@@ -49,7 +49,6 @@ FRAME_BIT_DEPTH_KEY = "bitDepth"
 """infoNode attribute (frames stream ``info`` node) giving the significant bits of 16-bit frames."""
 
 _OPENCV_DEPTHS = {0: np.uint8, 2: np.uint16}  # OpenCV depth code (type & 7) -> dtype
-_IMU_FIELDS = 11  # timestamp, temperature, acc x/y/z, gyro x/y/z, magnetometer x/y/z
 
 
 def decode_events(buf: bytes) -> np.ndarray:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Iterable
 from pathlib import Path
-from typing import BinaryIO, Self
+from typing import BinaryIO
 
 import numpy as np
 
@@ -28,7 +28,7 @@ from davis_io.aedat.aedat4_streams import (
     encode_triggers,
 )
 from davis_io.errors import UsageError
-from davis_io.types import Frame, Packet, SourceInfo
+from davis_io.types import Closing, Frame, Packet, SourceInfo
 
 __all__ = ["Aedat4Writer", "write_aedat4"]
 
@@ -39,7 +39,7 @@ _STREAM_IDS = {"EVTS": 0, "FRME": 1, "IMUS": 2, "TRIG": 3}
 _TABLE_PLACEHOLDER = -2  # replaced at close by the real data table position (same size)
 
 
-class Aedat4Writer:
+class Aedat4Writer(Closing):
     """Write packets to an AEDAT 4.0 file that DV tools and dv-processing open.
 
     Use as a context manager; the data table is written and the header patched on exit (also
@@ -78,12 +78,6 @@ class Aedat4Writer:
         ], self.compression)
         self._file: BinaryIO = self.path.open("wb")
         self._file.write(MAGIC + self._header(_TABLE_PLACEHOLDER))
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(self, *exc_info) -> None:
-        self.close()
 
     def write(self, packet: Packet) -> None:
         """Append every record of ``packet`` (one file packet per kind, one per frame)."""

@@ -18,6 +18,17 @@ __all__ = ["VERBS", "main"]
 VERBS: dict[str, str] = {
     # verb: module that implements it
     "inspect": "davis_io.cli.inspect_verb",
+    "record": "davis_io.cli.record_verb",
+    "bins": "davis_io.cli.bins_verb",
+    "poses": "davis_io.cli.poses_verb",
+    "export": "davis_io.cli.export_verb",
+    "devices": "davis_io.cli.devices_verb",
+    "doctor": "davis_io.cli.doctor_verb",
+    "udev": "davis_io.cli.udev_verb",
+    "fit": "seenerf.cli.fit_verb",
+    "render": "seenerf.cli.render_verb",
+    "eval": "seenerf.cli.eval_verb",
+    "bench": "seenerf.cli.bench_verb",
 }
 """Every verb of ``seecap``, in the order ``--help`` lists them."""
 

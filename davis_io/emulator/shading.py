@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from davis_io.emulator.colorfilter import LUMINANCE_WEIGHTS
+from davis_io.colorfilter import LUMINANCE_WEIGHTS
 from davis_io.emulator.raytrace import Surface
 from davis_io.emulator.textures import Texture
 

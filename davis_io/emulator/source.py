@@ -13,13 +13,12 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 from functools import cached_property
-from types import TracebackType
-from typing import Self
 
 import numpy as np
 
+from davis_io.colorfilter import filter_channels, filter_weights
 from davis_io.emulator.aps import ApsSettings, expose, subframe_times
-from davis_io.emulator.colorfilter import filter_channels, filter_weights, through_filter
+from davis_io.emulator.colorfilter import through_filter
 from davis_io.emulator.dvs import DVS_PRESETS, DvsPixels
 from davis_io.emulator.raytrace import PinholeCamera
 from davis_io.emulator.response import RESPONSE_CURVES
@@ -30,6 +29,7 @@ from davis_io.emulator.truth import Truth, build_truth
 from davis_io.errors import UsageError
 from davis_io.types import (
     TRIGGER_DTYPE,
+    Closing,
     ColorFilter,
     Frame,
     Packet,
@@ -172,7 +172,7 @@ def _build_trajectory(config: EmulatorConfig, scene: Scene) -> Trajectory:
     return Trajectory(positions, np.asarray(scene.target), windows, shake)
 
 
-class EmulatedCamera:
+class EmulatedCamera(Closing):
     """A DAVIS346 that films a built-in scene: APS frames, DVS events and APS triggers.
 
     Use as ``with EmulatedCamera("room", seed=1) as camera: for packet in camera: ...``.
@@ -200,17 +200,6 @@ class EmulatedCamera:
     def from_config(cls, config: EmulatorConfig) -> EmulatedCamera:
         """A camera with exactly these settings."""
         return cls(**asdict(config))
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        return None
 
     @cached_property
     def truth(self) -> Truth:

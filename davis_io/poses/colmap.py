@@ -230,11 +230,6 @@ def reconstruct(
     return sparse_model_from(best)
 
 
-def load_model(model_dir: Path) -> SparseModel:
-    """Read a sparse model written by :func:`reconstruct` (COLMAP binary files)."""
-    return sparse_model_from(pycolmap.Reconstruction(model_dir))
-
-
 def sparse_model_from(reconstruction: pycolmap.Reconstruction) -> SparseModel:
     """Plain arrays from a pycolmap reconstruction with one shared camera."""
     camera = next(iter(reconstruction.cameras.values()))

@@ -12,20 +12,11 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from davis_io.errors import UsageError
+from davis_io.colorfilter import bayer_to_rgb_code
 from davis_io.poses.edi import edi_latent_frames
 from davis_io.types import ColorFilter, Frame
 
 __all__ = ["ResponseCurve", "latent_images", "normalised_image", "sharpness"]
-
-_BAYER_TO_RGB = {
-    ColorFilter.RGGB: cv2.COLOR_BayerRGGB2RGB,
-    ColorFilter.GRBG: cv2.COLOR_BayerGRBG2RGB,
-    ColorFilter.GBRG: cv2.COLOR_BayerGBRG2RGB,
-    ColorFilter.BGGR: cv2.COLOR_BayerBGGR2RGB,
-}
-"""OpenCV names the pattern by the 2x2 block's top-left pair; ``*2RGB`` gives RGB order."""
-
 
 @dataclass(frozen=True)
 class ResponseCurve:
@@ -57,12 +48,7 @@ def _to_8bit(image: np.ndarray, color_filter: ColorFilter) -> np.ndarray:
     codes = np.clip(np.rint(image * 255.0), 0, 255).astype(np.uint8)
     if not color_filter.is_color:
         return codes
-    if color_filter not in _BAYER_TO_RGB:
-        raise UsageError(
-            f"colour filter {color_filter.value} cannot be demosaiced for COLMAP; only the "
-            f"2x2 Bayer patterns {', '.join(c.value for c in _BAYER_TO_RGB)} are supported"
-        )
-    return cv2.cvtColor(codes, _BAYER_TO_RGB[color_filter])
+    return cv2.cvtColor(codes, bayer_to_rgb_code(color_filter))
 
 
 def latent_images(

@@ -27,17 +27,11 @@ from davis_io.session.store import Session
 __all__ = [
     "RepairReport",
     "describe_session",
-    "is_session",
     "repair_session",
     "session_report",
 ]
 
 _REPAIRED_REASON = "the recording never closed (killed, crashed or unplugged); repaired"
-
-
-def is_session(path: Path | str) -> bool:
-    """True when ``path`` is a session folder (it holds ``session.json``)."""
-    return (Path(path) / "session.json").is_file()
 
 
 def describe_session(path: Path | str, args: argparse.Namespace) -> int:

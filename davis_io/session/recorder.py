@@ -34,7 +34,6 @@ __all__ = ["RecordingError", "RecordingResult", "record"]
 
 _QUEUE_PACKETS = 256
 _STATUS_INTERVAL_S = 0.5
-_PREVIEW_INTERVAL_S = 1.0
 _READER_JOIN_S = 5.0
 
 
@@ -99,7 +98,7 @@ def record(
         duration_us: stop after this much device time, µs (None: no limit).
         overwrite: replace an existing session folder.
         status_callback: called about twice a second with a :class:`RecordingStatus`.
-        preview: PNG refreshed about once a second with the newest frame and its events.
+        preview: PNG refreshed with the newest frame and its events (checked every 0.5 s).
         drop_when_full: drop packets when the queue is full instead of waiting. None: drop only
             for a live camera (``source.info.origin == "usb"``), whose reader must never wait;
             replay and emulator sources wait, losing nothing.

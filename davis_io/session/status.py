@@ -11,7 +11,7 @@ from davis_io.session.manifest import DropCounters
 from davis_io.types import Frame
 
 __all__ = [
-    "BLUR_EVENTS_PER_PIXEL",
+    "BLUR_EVENTS_PER_BIN",
     "BLUR_PIXEL_FRACTION",
     "CLIPPED_FRACTION",
     "RecordingStatus",
@@ -25,9 +25,10 @@ _DARK_LEVEL = 0.02
 """Underexposed: at or below 2 % of full scale."""
 _BRIGHT_LEVEL = 0.98
 """Saturated: at or above 98 % of full scale."""
-BLUR_EVENTS_PER_PIXEL = 4
-"""A pixel that fired this many events in one exposure saw its log intensity change by about
-4 contrast thresholds (e^1.2 = 3.3x at Θ = 0.3) while the shutter was open: strong motion."""
+BLUR_EVENTS_PER_BIN = 4
+"""A pixel that fired more than this many events per bin on average (more than ``4 * b`` in the
+exposure) changed its brightness by over e^1.2 = 3.3x (Θ = 0.3) between neighbouring latent
+frames: more motion than the ``b + 1`` latent frames of the blur model represent."""
 BLUR_PIXEL_FRACTION = 0.10
 """Warn of strong blur when more than this fraction of the pixels did so."""
 
@@ -78,9 +79,10 @@ def format_status_line(status: RecordingStatus) -> str:
 def frame_warnings(index: int, frame: Frame, bins: ExposureBins) -> list[str]:
     """Quality warnings for one recorded frame (empty when it looks fine).
 
-    Checks: saturated fraction (>= 98 % of full scale), underexposed fraction (<= 2 %), strong
-    blur (many pixels fired :data:`BLUR_EVENTS_PER_PIXEL` or more events during the exposure),
-    and an exposure with no event at all (nothing moved, or the DVS is off).
+    Checks: saturated fraction (>= 98 % of full scale), underexposed fraction (<= 2 %), blur
+    stronger than the bins represent (many pixels fired more than :data:`BLUR_EVENTS_PER_BIN`
+    events per bin, summed over the ``b`` bins), and an exposure with no event at all (nothing
+    moved, or the DVS is off).
     """
     full_scale = float((1 << frame.bit_depth) - 1)
     level = frame.image.astype(np.float32) / full_scale
@@ -95,9 +97,11 @@ def frame_warnings(index: int, frame: Frame, bins: ExposureBins) -> list[str]:
     if bins.event_count == 0:
         warnings.append(f"{where}: no events during the exposure (no motion, or DVS off)")
     else:
+        b = len(bins.raw)
         fired = np.abs(bins.raw.astype(np.int32)).sum(axis=0)
-        busy = float(np.mean(fired >= BLUR_EVENTS_PER_PIXEL))
+        busy = float(np.mean(fired > BLUR_EVENTS_PER_BIN * b))
         if busy > BLUR_PIXEL_FRACTION:
-            warnings.append(f"{where}: strong blur ({busy:.0%} of pixels fired >= "
-                            f"{BLUR_EVENTS_PER_PIXEL} events): move slower")
+            warnings.append(f"{where}: blur too strong for b={b} bins ({busy:.0%} of pixels fired "
+                            f"> {BLUR_EVENTS_PER_BIN * b} events): use more bins, a shorter "
+                            "exposure or slower motion")
     return warnings

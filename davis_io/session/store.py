@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 from pathlib import Path
-from types import TracebackType
-from typing import Self
 
 import h5py
 import numpy as np
@@ -28,6 +26,7 @@ from davis_io.types import (
     EVENT_DTYPE,
     IMU_DTYPE,
     TRIGGER_DTYPE,
+    Closing,
     ColorFilter,
     Frame,
     empty_events,
@@ -40,7 +39,7 @@ _BINS_FIELDS = ("split_us", "weights", "raw", "calibrated", "event_count")
 _FRAME_FIELDS = ("image", "events_lost", *FRAME_TIMES)
 
 
-class Session:
+class Session(Closing):
     """A recorded session folder, read through ``session.json`` and ``session.h5``.
 
     Open with :meth:`open`; use as a context manager to close the HDF5 file. A session whose
@@ -82,17 +81,6 @@ class Session:
     def close(self) -> None:
         """Close the HDF5 file."""
         self._h5.close()
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
     @property
     def h5_path(self) -> Path:

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import usb.core
 
+from davis_io.chips import SENSOR_SIZES
 from davis_io.types import ColorFilter, PacketSource
 from davis_io.usb import protocol as P
 from davis_io.usb.emulated_stream import SourceWords, StreamChunk, StreamFaults
@@ -49,6 +50,7 @@ def usb_error(kind: str) -> usb.core.USBError:
 
 
 def _default_registers(color_filter: ColorFilter) -> dict[tuple[int, int], int]:
+    columns, rows = SENSOR_SIZES["DAVIS346"]
     regs = {
         (P.Module.SYSINFO, P.SysInfo.LOGIC_VERSION): P.REQUIRED_LOGIC_VERSION,
         (P.Module.SYSINFO, P.SysInfo.CHIP_IDENTIFIER): P.ChipId.DAVIS346B,
@@ -58,10 +60,10 @@ def _default_registers(color_filter: ColorFilter) -> dict[tuple[int, int], int]:
         (P.Module.SYSINFO, P.SysInfo.USB_CLOCK): 30,
         (P.Module.SYSINFO, P.SysInfo.CLOCK_DEVIATION): 1000,
         (P.Module.SYSINFO, P.SysInfo.LOGIC_PATCH): 1,
-        (P.Module.DVS, P.Dvs.SIZE_COLUMNS): 346,
-        (P.Module.DVS, P.Dvs.SIZE_ROWS): 260,
-        (P.Module.APS, P.Aps.SIZE_COLUMNS): 346,
-        (P.Module.APS, P.Aps.SIZE_ROWS): 260,
+        (P.Module.DVS, P.Dvs.SIZE_COLUMNS): columns,
+        (P.Module.DVS, P.Dvs.SIZE_ROWS): rows,
+        (P.Module.APS, P.Aps.SIZE_COLUMNS): columns,
+        (P.Module.APS, P.Aps.SIZE_ROWS): rows,
         (P.Module.APS, P.Aps.COLOR_FILTER): _COLOR_FILTER_REGISTER[color_filter],
         (P.Module.APS, P.Aps.HAS_GLOBAL_SHUTTER): 1,
         (P.Module.IMU, P.Imu.TYPE): 1,

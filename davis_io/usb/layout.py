@@ -4,12 +4,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from davis_io.chips import SENSOR_SIZES
+
 __all__ = ["SensorLayout"]
+
+_DEFAULT_COLUMNS, _DEFAULT_ROWS = SENSOR_SIZES["DAVIS346"]
 
 
 @dataclass(frozen=True)
 class SensorLayout:
     """Geometry and orientation of one DAVIS sensor, as read from its info registers.
+
+    The defaults describe a DAVIS346 in its normal orientation.
 
     Attributes:
         dvs_columns: DVS SIZE_COLUMNS (raw, before invertXY), pixels.
@@ -23,11 +29,11 @@ class SensorLayout:
         adc_doubling: True on DAVIS240, whose APS samples are doubled before CDS.
     """
 
-    dvs_columns: int = 346
-    dvs_rows: int = 260
+    dvs_columns: int = _DEFAULT_COLUMNS
+    dvs_rows: int = _DEFAULT_ROWS
     dvs_invert_xy: bool = False
-    aps_columns: int = 346
-    aps_rows: int = 260
+    aps_columns: int = _DEFAULT_COLUMNS
+    aps_rows: int = _DEFAULT_ROWS
     aps_orientation: int = 0
     imu_type: int = 1
     imu_orientation: int = 0

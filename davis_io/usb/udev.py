@@ -22,8 +22,9 @@ __all__ = [
 
 RULES_NAME = "60-seecap-davis.rules"
 RULES_DIR = Path("/etc/udev/rules.d")
-SHIPPED_RULES = Path(__file__).resolve().parents[2] / "udev" / RULES_NAME
-"""The rule file in the repository's ``udev/`` folder."""
+SHIPPED_RULES = Path(__file__).resolve().with_name(RULES_NAME)
+"""The rule file shipped inside the package (package data; the repository's ``udev/`` folder holds
+the same file for installation without Python)."""
 
 
 def rules_text() -> str:
@@ -32,7 +33,7 @@ def rules_text() -> str:
         return SHIPPED_RULES.read_text(encoding="utf-8")
     except OSError as error:
         raise DavisIOError(f"cannot read the udev rule file {SHIPPED_RULES}: {error}; "
-                           "reinstall seecap from its source tree") from error
+                           "reinstall seecap") from error
 
 
 def installed_rule_path(rules_dir: Path = RULES_DIR) -> Path | None:

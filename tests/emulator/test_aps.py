@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from davis_io.colorfilter import filter_weights
 from davis_io.emulator.aps import (
     ApsSettings,
     expose,
@@ -10,7 +11,7 @@ from davis_io.emulator.aps import (
     subframe_times,
     trapezoid_weights,
 )
-from davis_io.emulator.colorfilter import filter_weights, sensor_channels
+from davis_io.emulator.colorfilter import sensor_channels
 from davis_io.emulator.response import apply_response, film, reinhard_gamma, response_table
 from davis_io.errors import UsageError
 from davis_io.types import ColorFilter

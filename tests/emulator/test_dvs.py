@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
 
-from davis_io.emulator.colorfilter import filter_weights, through_filter
+from davis_io.colorfilter import filter_weights
+from davis_io.emulator.colorfilter import through_filter
 from davis_io.emulator.dvs import DVS_PRESETS, DvsParams, DvsPixels, intensity_factor, lin_log
 from davis_io.errors import UsageError
 from davis_io.types import ColorFilter

@@ -2,7 +2,8 @@ import cv2
 import numpy as np
 import pytest
 
-from davis_io.emulator.colorfilter import filter_channels, filter_weights, through_filter
+from davis_io.colorfilter import filter_channels, filter_weights
+from davis_io.emulator.colorfilter import through_filter
 from davis_io.emulator.raytrace import PinholeCamera, Quad, Sphere, box_faces, nearest_hits
 from davis_io.emulator.scenes import SCENES, get_scene
 from davis_io.emulator.trajectory import look_at

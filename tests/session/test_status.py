@@ -14,8 +14,8 @@ def frame_of(image, bit_depth=10):
                  readout_start_us=0, readout_end_us=160_000, bit_depth=bit_depth)
 
 
-def bins_with(counts_per_pixel, width=10, height=10):
-    """Bins where the first ``len(counts_per_pixel)`` pixels fired that many ON events."""
+def bins_with(counts_per_pixel, width=10, height=10, b=1):
+    """``b`` bins where the first ``len(counts_per_pixel)`` pixels fired that many ON events."""
     times, pixels = [], []
     for pixel, count in enumerate(counts_per_pixel):
         times += list(range(count))
@@ -26,7 +26,7 @@ def bins_with(counts_per_pixel, width=10, height=10):
     events["x"] = np.array(pixels, dtype=int)[order] % width
     events["y"] = np.array(pixels, dtype=int)[order] // width
     events["p"] = 1
-    return bin_exposure(events, 0, 150_000, 1, width, height)
+    return bin_exposure(events, 0, 150_000, b, width, height)
 
 
 def test_a_good_frame_has_no_warning():
@@ -44,14 +44,23 @@ def test_saturated_and_underexposed_fractions():
     assert "100% underexposed" in warning
 
 
-def test_no_events_and_strong_blur():
+def test_no_events():
     image = np.full((10, 10), 500, np.uint16)
     (warning,) = frame_warnings(0, frame_of(image), bins_with([]))
     assert "no events during the exposure" in warning
-    # 11 of 100 pixels fired 4 events (> 10 % of pixels at >= 4): strong blur.
-    (warning,) = frame_warnings(0, frame_of(image), bins_with([4] * 11))
-    assert "strong blur (11% of pixels" in warning
-    assert frame_warnings(0, frame_of(image), bins_with([4] * 10 + [3] * 50)) == []
+
+
+def test_blur_is_judged_against_the_bin_count():
+    image = np.full((10, 10), 500, np.uint16)
+    # b = 1: the limit is 4 events per pixel. 11 of 100 pixels fired 5 (> 10 % above it): warn.
+    (warning,) = frame_warnings(0, frame_of(image), bins_with([5] * 11))
+    assert "blur too strong for b=1 bins (11% of pixels fired > 4 events)" in warning
+    # 10 % above the limit, or any number exactly at it, is not more than 10 %: quiet.
+    assert frame_warnings(0, frame_of(image), bins_with([5] * 10 + [4] * 50)) == []
+    # b = 4: the limit is 4 * 4 = 16 events; 16 everywhere is fine, 17 at 11 pixels is not.
+    assert frame_warnings(0, frame_of(image), bins_with([16] * 100, b=4)) == []
+    (warning,) = frame_warnings(0, frame_of(image), bins_with([17] * 11 + [16] * 89, b=4))
+    assert "blur too strong for b=4 bins (11% of pixels fired > 16 events)" in warning
 
 
 def test_status_line():

@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -20,6 +21,13 @@ def test_udev_prints_the_rule_file(capsys):
         'SUBSYSTEM=="usb", ATTR{idVendor}=="152a", ATTR{idProduct}=="841b", TAG+="uaccess"',
     ]
     assert "MODE" not in "".join(rules)
+
+
+def test_packaged_rule_file_is_the_repository_copy():
+    # The wheel ships davis_io/usb/60-seecap-davis.rules; udev/ at the top holds the same bytes.
+    repository_copy = Path(__file__).resolve().parents[2] / "udev" / udev.RULES_NAME
+    assert udev.SHIPPED_RULES.parent == Path(udev.__file__).resolve().parent
+    assert udev.SHIPPED_RULES.read_bytes() == repository_copy.read_bytes()
 
 
 def test_install_as_user_prints_the_exact_sudo_line(monkeypatch, capsys):

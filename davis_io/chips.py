@@ -1,4 +1,4 @@
-"""DAVIS chip names as written in AEDAT headers, mapped to camera model and sensor size."""
+"""DAVIS camera models: sensor size per model, and chip names (AEDAT headers) mapped to models."""
 
 from __future__ import annotations
 
