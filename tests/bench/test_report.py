@@ -1,0 +1,61 @@
+import json
+import math
+
+from benchlib.fits import SpeedProbe
+from benchlib.machine import Machine
+from benchlib.plan import make_plan
+from benchlib.report import BenchReport, render_markdown, target_checks, write_json
+from benchlib.results import RunRow
+
+MACHINE = Machine("Test CPU", 2, "Linux", "3.11", "2.0", "2.13", "cpu", 2, (1.0, 0.5, 0.25))
+
+
+def report_with(rows):
+    plan = make_plan(True, ("fast", "paper"), ("full", "no-events", "base", "oracle"))
+    return BenchReport("python tools/bench.py --quick", MACHINE, "2026-01-01 00:00 UTC", plan,
+                       "truth", wall_s=600.0, rows=rows)
+
+
+def run(variant, hdr, budget=20.0, preset="fast", **kwargs):
+    return RunRow("room", preset, variant, budget, hdr_psnr=hdr, hdr_ssim=0.9, novel_psnr=hdr + 2,
+                  novel_ssim=0.9, steps=10, train_s=budget, rays_per_s=kwargs.pop("rays", 1e4),
+                  render_s_per_view=kwargs.pop("render", 0.5), **kwargs)
+
+
+def test_target_checks_read_the_table_budget_runs():
+    rows = [run("full", 24.0), run("full", 31.0, budget=60.0), run("base", 20.5),
+            run("no-events", 23.5), run("oracle", 28.0)]
+    report = report_with(rows)
+    report.speed = SpeedProbe({"fast": 1e4, "paper": 50.0, "fast_over_paper": 200.0})
+    checks = {c[0]: c[1:] for c in target_checks(report)}
+    # Margins at the 20 s table budget: 24.0 - 20.5 = 3.5, 24.0 - 23.5 = 0.5, 28.0 - 24.0 = 4.0.
+    assert checks["full − base, HDR PSNR dB"] == ["3.50", ">= 3", "met"]
+    assert checks["full − no-events, HDR PSNR dB"] == ["0.50", ">= 1", "**missed**"]
+    assert checks["oracle − full, HDR PSNR dB"] == ["4.00", "<= 3", "**missed**"]
+    # Absolute quality from the longest fast/full run within 10 minutes: the 60 s rung.
+    assert checks["fast within 60 s: HDR PSNR dB"] == ["31.00", ">= 30", "met"]
+    assert checks["fast within 60 s: novel-exposure PSNR dB"] == ["33.00", ">= 30", "met"]
+    assert checks["rays/s, fast ÷ paper (same process)"] == ["200.00", ">= 100", "met"]
+    assert checks["fast: render one view, s"] == ["0.50", "<= 1", "met"]
+
+
+def test_empty_report_renders_with_nothing_measured(tmp_path):
+    report = report_with([])
+    text = render_markdown(report)
+    assert text.startswith("## Speed against error\n")
+    assert "Machine: Test CPU, 2 cores" in text
+    assert text.count("**Paper's ordering here: not measured.**") == 5
+    assert "Not measured (the main session was not ready)." in text
+    assert all(check[-1] == "not measured" for check in target_checks(report))
+    write_json(report, tmp_path / "results.json")
+    saved = json.loads((tmp_path / "results.json").read_text())
+    assert saved["rows"] == [] and saved["plan"]["quick"] is True
+    assert [v["summary"] for v in saved["verdicts"]] == ["not measured"] * 5
+    assert len(saved["targets"]) == 7
+
+
+def test_json_keeps_nan_and_rows(tmp_path):
+    report = report_with([run("full", math.nan)])
+    write_json(report, tmp_path / "results.json")
+    saved = json.loads((tmp_path / "results.json").read_text())
+    assert math.isnan(saved["rows"][0]["hdr_psnr"]) and saved["rows"][0]["variant"] == "full"

@@ -1,0 +1,137 @@
+"""Benchmark: speed against error for every preset and variant, the paper's tables, capture speed.
+
+One command regenerates every number of the report:
+
+    python tools/bench.py [--quick] [--out bench-out] [--poses auto|estimated|truth]
+                          [--presets fast ...] [--variants full ...] [--budgets 60 180 ...]
+                          [--table-budget S] [--table4 | --no-table4] [--no-capture]
+
+1. Sessions: the ``room`` benchmark of ``make_benchmark.py`` and the Table 4 sessions (input
+   exposure x1/16, x1, x16 of 0.016 s at a fixed gain; DVS noise x1, x2, x4), recorded once under
+   ``OUT/sessions/`` with their poses and reused by later runs.
+2. Runs: each preset x variant, each in its own ``seecap fit`` process per budget (a ladder of
+   budgets resumes one run), scored on the held-out views against the emulator's truth.
+3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here.
+4. Capture side: ``bench_decode.py``, ``bench_usb.py`` and ``bench_record.py``.
+
+Writes ``OUT/report.md`` (a section for BENCHMARKS.md), ``OUT/results.json`` and
+``OUT/speed_vs_error.png``; the report is rewritten after every run, so an interrupted benchmark
+leaves a partial one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from datetime import UTC, datetime
+from pathlib import Path
+
+from benchlib.capture import CAPTURE_BENCHES, run_capture_bench
+from benchlib.fits import run_ladder, run_speed_probe
+from benchlib.machine import describe_machine, exact_command
+from benchlib.plan import make_plan
+from benchlib.plot import speed_error_figure, write_png
+from benchlib.poses_step import POSE_SOURCES, resolve_pose_source
+from benchlib.report import BenchReport, render_markdown, write_json
+from benchlib.results import RunRow
+from benchlib.sessions import prepare_session
+
+from seenerf.presets import PRESETS
+from seenerf.variants import VARIANTS
+
+TOOLS_DIR = Path(__file__).resolve().parent
+
+
+def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="about 15 minutes: 20 s and 60 s budgets, 4 + 2 views, the fast "
+                        "preset's Table 3 variants and the oracle")
+    parser.add_argument("--out", type=Path, default=Path("bench-out"), help="output folder")
+    parser.add_argument("--poses", choices=("auto", *POSE_SOURCES), default="auto",
+                        help="estimated (the real pipeline), the emulator's truth, or auto: "
+                        "estimated unless --quick (too few views) or no estimator is installed")
+    parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS))
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    parser.add_argument("--budgets", nargs="+", type=float, default=[],
+                        help="budget ladder in seconds (default: 20 60 quick, 60 180 600 1800)")
+    parser.add_argument("--table-budget", type=float, default=0.0,
+                        help="budget of the paper comparisons, s (default: 20 quick, 600)")
+    parser.add_argument("--table4", action=argparse.BooleanOptionalAction, default=None,
+                        help="make and fit the Table 4 sessions (default: not with --quick)")
+    parser.add_argument("--no-capture", action="store_true", help="skip capture throughput")
+    return parser.parse_args(argv)
+
+
+def write_outputs(report: BenchReport, out: Path) -> None:
+    """Rewrite ``report.md``, ``results.json`` and the plot from what is measured so far."""
+    write_png(out / report.plot_name, speed_error_figure(report.rows, report.plan.sessions[0].key))
+    (out / "report.md").write_text(render_markdown(report))
+    write_json(report, out / "results.json")
+
+
+def measure_capture(report: BenchReport, out: Path) -> None:
+    """Run each capture-side tool in its own process; keep its figures."""
+    for bench in CAPTURE_BENCHES:
+        result = run_capture_bench(bench, TOOLS_DIR, out / "logs", report.plan.quick)
+        report.capture.append(result)
+        print(f"{bench.tool}: {result.error or result.figures}")
+
+
+def prepare_sessions(report: BenchReport, out: Path) -> dict[str, Path]:
+    """Record (or reuse) every session with poses; return the ready ones by key."""
+    plan = report.plan
+    root = out / "sessions" / f"{'quick' if plan.quick else 'full'}-{report.poses}"
+    for spec in plan.sessions:
+        outcome = prepare_session(spec, root, plan.views, report.poses, out / "logs")
+        report.sessions.append(outcome)
+        print(f"session {spec.key}: {outcome.error or 'ready'} ({outcome.folder})")
+    return {s.spec.key: s.folder for s in report.sessions if not s.error}
+
+
+def run_fits(report: BenchReport, ready: dict[str, Path], out: Path, started: float) -> None:
+    """Every ladder of the plan; the report is rewritten after each."""
+    for ladder in report.plan.ladders:
+        if ladder.session not in ready:
+            report.rows.append(RunRow(ladder.session, ladder.preset, ladder.variant,
+                                      ladder.budgets_s[0], status="session not ready"))
+            continue
+        report.rows += run_ladder(ladder, ready[ladder.session], out)
+        report.wall_s = time.monotonic() - started
+        write_outputs(report, out)
+
+
+def main(argv: list[str] | None = None, command: str | None = None) -> int:
+    """Run the benchmark; return 0 when every session and run succeeded, else 1."""
+    args = parse_arguments(argv)
+    started = time.monotonic()
+    plan = make_plan(args.quick, tuple(args.presets), tuple(args.variants), tuple(args.budgets),
+                     args.table_budget, table4=args.table4)
+    out = args.out.resolve()  # children run in other folders
+    out.mkdir(parents=True, exist_ok=True)
+    typed = sys.argv if argv is None else ["tools/bench.py", *argv]
+    report = BenchReport(command or exact_command(typed), describe_machine(),
+                         datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"), plan,
+                         resolve_pose_source(args.poses, args.quick))
+    print(f"command: {report.command}\nmachine: {report.machine.line()}")
+    print(f"plan: {len(plan.sessions)} sessions, {len(plan.ladders)} runs, "
+          f"{sum(len(ladder.budgets_s) for ladder in plan.ladders)} scored rungs, at least "
+          f"{sum(ladder.budgets_s[-1] for ladder in plan.ladders) / 60:.0f} min of training")
+    if not args.no_capture:
+        measure_capture(report, out)
+    ready = prepare_sessions(report, out)
+    main_session = plan.sessions[0].key
+    if main_session in ready:
+        report.speed = run_speed_probe(ready[main_session], out / "logs")
+        print(f"preset speed: {report.speed.error or report.speed.rays_per_s}")
+    run_fits(report, ready, out, started)
+    report.wall_s = time.monotonic() - started
+    write_outputs(report, out)
+    print(f"report: {out / 'report.md'} ({report.wall_s / 60:.1f} min)")
+    failed = [s for s in report.sessions if s.error] + [r for r in report.rows if not r.ok]
+    return 0 if not failed else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

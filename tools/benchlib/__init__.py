@@ -1,0 +1,1 @@
+"""Parts of ``tools/bench.py``: plan, sessions, measured runs, paper numbers, report and plot."""

@@ -1,0 +1,189 @@
+"""What one benchmark run measures: the sessions, and every preset x variant budget ladder."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = [
+    "FULL_BUDGETS_S",
+    "QUICK_BUDGETS_S",
+    "Ladder",
+    "Plan",
+    "SessionSpec",
+    "TABLE4_ROWS",
+    "make_plan",
+]
+
+FULL_BUDGETS_S = (60.0, 180.0, 600.0, 1800.0)
+"""Wall-clock budgets of the full benchmark: 1, 3, 10 and 30 minutes."""
+
+QUICK_BUDGETS_S = (20.0, 60.0)
+"""Budgets of ``--quick``: enough to check the whole pipeline and the report, not to converge."""
+
+QUICK_VARIANTS = ("full", "no-events", "base", "naive-events", "point-crf-3d", "evdeblur-ecrf",
+                  "oracle")
+"""Variants of ``--quick``: Table 3 and the oracle (the trainer's targets need full, base,
+no-events and oracle); Table 9's variants run in the full benchmark."""
+
+UNSUPPORTED_VARIANTS = {
+    "multi-exposure": "needs frames of several exposures; the benchmark sessions have one",
+}
+"""Variants left out of the grid, with the reason printed in the report."""
+
+QUICK_UNFITTED_PRESETS = {
+    "paper": "one fit of the published batch (1024 pixels x 5 poses x 192 samples through the "
+             "8x256 MLP) held over 13 GB of memory here and renders for minutes; its speed is "
+             "in the rays-per-second table",
+    "balanced": "left out to stay within 15 minutes (each fit costs about a minute beyond its "
+                "budget in start-up and renders); its speed is in the rays-per-second table",
+}
+"""Presets ``--quick`` measures only for speed, with the reason printed in the report."""
+
+REFERENCE_EXPOSURE_US = 16_000
+"""Table 4's reference exposure (the paper's 0.016 s); the sweep is x1/16, x1 and x16 of it,
+with the sensor gain held at the reference, so shorter exposures are darker, longer ones clip."""
+
+
+@dataclass(frozen=True)
+class SessionSpec:
+    """An emulated benchmark session.
+
+    Attributes:
+        key: name in the report and folder name.
+        scene: built-in emulator scene.
+        seed: emulator seed.
+        exposure_us: APS exposure, µs.
+        gain_exposure_us: exposure whose reciprocal sets the sensor gain (0: ``exposure_us``,
+            the emulator's default, which keeps every exposure equally bright).
+        noise_scale: multiplier of the DVS leak and shot-noise rates.
+        maker: ``benchmark`` (``tools/make_benchmark.py``) or ``bracket`` (this tool's maker).
+    """
+
+    key: str
+    scene: str = "room"
+    seed: int = 1
+    exposure_us: int = 150_000
+    gain_exposure_us: int = 0
+    noise_scale: float = 1.0
+    maker: str = "bracket"
+
+
+@dataclass(frozen=True)
+class Ladder:
+    """One (session, preset, variant) trained once, scored at each budget on the way."""
+
+    session: str
+    preset: str
+    variant: str
+    budgets_s: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything one invocation measures.
+
+    Attributes:
+        quick: the short smoke-test mode.
+        views: training and held-out views per session.
+        sessions: sessions to make (cached) before fitting.
+        ladders: runs, in execution order.
+        table_preset: preset of the paper comparisons.
+        table_budget_s: budget at which the comparisons are read, s.
+        notes: what was left out, and why.
+    """
+
+    quick: bool
+    views: tuple[int, int]
+    sessions: tuple[SessionSpec, ...]
+    ladders: tuple[Ladder, ...]
+    table_preset: str
+    table_budget_s: float
+    notes: tuple[str, ...] = ()
+
+
+MAIN_SESSION = SessionSpec("room", maker="benchmark")
+
+TABLE4_SESSIONS = (
+    SessionSpec("t4-exposure-1_16", exposure_us=REFERENCE_EXPOSURE_US // 16,
+                gain_exposure_us=REFERENCE_EXPOSURE_US),
+    SessionSpec("t4-reference", exposure_us=REFERENCE_EXPOSURE_US,
+                gain_exposure_us=REFERENCE_EXPOSURE_US),
+    SessionSpec("t4-exposure-16", exposure_us=REFERENCE_EXPOSURE_US * 16,
+                gain_exposure_us=REFERENCE_EXPOSURE_US),
+    SessionSpec("t4-noise-2", exposure_us=REFERENCE_EXPOSURE_US,
+                gain_exposure_us=REFERENCE_EXPOSURE_US, noise_scale=2.0),
+    SessionSpec("t4-noise-4", exposure_us=REFERENCE_EXPOSURE_US,
+                gain_exposure_us=REFERENCE_EXPOSURE_US, noise_scale=4.0),
+)
+
+TABLE4_ROWS = {
+    "exposure-x1/16": "t4-exposure-1_16",
+    "exposure-x1": "t4-reference",
+    "exposure-x16": "t4-exposure-16",
+    "noise-x1": "t4-reference",
+    "noise-x2": "t4-noise-2",
+    "noise-x4": "t4-noise-4",
+}
+"""Table 4 row key -> session fitted for it (the reference session serves both halves)."""
+
+
+def _grid(presets: tuple[str, ...], variants: tuple[str, ...], budgets: tuple[float, ...],
+          table_budget_s: float) -> list[Ladder]:
+    """The main session's ladders: ``full`` of every preset climbs every budget; other
+    variants stop at the table budget (the comparisons need nothing longer)."""
+    ladders = []
+    for preset in presets:
+        for variant in variants:
+            short = tuple(b for b in budgets if b <= table_budget_s) or budgets[:1]
+            ladders.append(Ladder(MAIN_SESSION.key, preset, variant,
+                                  budgets if variant == "full" else short))
+    return ladders
+
+
+def make_plan(quick: bool, presets: tuple[str, ...], variants: tuple[str, ...],
+              budgets_s: tuple[float, ...] = (), table_budget_s: float = 0.0,
+              table_preset: str = "fast", table4: bool | None = None) -> Plan:
+    """The plan of one invocation.
+
+    Args:
+        quick: short budgets, 4 + 2 views per session, :data:`QUICK_VARIANTS` of the table
+            preset, other presets only for ``full`` (none of :data:`QUICK_UNFITTED_PRESETS`).
+        presets: every preset to run.
+        variants: every variant to run (unsupported ones are left out with a note).
+        budgets_s: the budget ladder, s (default: :data:`QUICK_BUDGETS_S` or
+            :data:`FULL_BUDGETS_S`).
+        table_budget_s: budget of the comparisons (default: the first quick budget, or 10 min).
+        table_preset: preset of the comparisons.
+        table4: also make the Table 4 sessions and fit them (None: only without ``quick``).
+    """
+    budgets = tuple(sorted(budgets_s or (QUICK_BUDGETS_S if quick else FULL_BUDGETS_S)))
+    table_budget = table_budget_s or (budgets[0] if quick else min(600.0, budgets[-1]))
+    notes = [f"variant {name} left out: {why}" for name, why in UNSUPPORTED_VARIANTS.items()
+             if name in variants]
+    variants = tuple(v for v in variants if v not in UNSUPPORTED_VARIANTS)
+    if quick:
+        dropped = [v for v in variants if v not in QUICK_VARIANTS]
+        variants = tuple(v for v in variants if v in QUICK_VARIANTS)
+        ladders = _grid(tuple(p for p in presets if p == table_preset), variants, budgets,
+                        table_budget)
+        others = [Ladder(MAIN_SESSION.key, p, "full", (budgets[0],))
+                  for p in presets if p not in (table_preset, *QUICK_UNFITTED_PRESETS)]
+        ladders += others
+        if others:
+            notes.append("quick mode: other presets run only the full variant at the first budget")
+        notes += [f"quick mode does not fit the {p} preset: {QUICK_UNFITTED_PRESETS[p]}"
+                  for p in presets if p in QUICK_UNFITTED_PRESETS]
+        if dropped:
+            notes.append(f"quick mode leaves out {', '.join(dropped)} (run without --quick)")
+    else:
+        ladders = _grid(presets, variants, budgets, table_budget)
+    sessions = [MAIN_SESSION]
+    if table4 is None:
+        table4 = not quick
+    if not table4:
+        notes.append("Table 4 sessions not made" + (" in quick mode" if quick else ""))
+    else:
+        sessions += TABLE4_SESSIONS
+        ladders += [Ladder(s.key, table_preset, "full", (table_budget,)) for s in TABLE4_SESSIONS]
+    return Plan(quick, (4, 2) if quick else (16, 8), tuple(sessions), tuple(ladders),
+                table_preset, table_budget, tuple(notes))

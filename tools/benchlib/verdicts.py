@@ -1,0 +1,111 @@
+"""Whether the paper's orderings hold on our runs, and the measured differences where not."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from benchlib.numbers import fmt
+from benchlib.paper import Claim, Comparison, paper_claims
+from benchlib.results import RunRow
+
+__all__ = ["TIE_DB", "ClaimVerdict", "ComparisonVerdict", "explain_difference", "judge"]
+
+TIE_DB = 0.05
+"""HDR PSNR differences smaller than this are ties: the report prints 0.01 dB, and a gap this
+small says nothing about an ordering measured from one run per row."""
+
+
+@dataclass(frozen=True)
+class ClaimVerdict:
+    """One paper ordering checked on our runs.
+
+    Attributes:
+        claim: the paper's ordering.
+        outcome: ``holds``, ``reversed``, ``tie`` (within :data:`TIE_DB`) or ``not measured``
+            (a run missing or failed).
+        better_db: our HDR PSNR of the row the paper ranks higher, dB.
+        worse_db: our HDR PSNR of the row the paper ranks lower, dB.
+        reason: measured per-component differences (filled unless it holds or is unmeasured).
+    """
+
+    claim: Claim
+    outcome: str
+    better_db: float = math.nan
+    worse_db: float = math.nan
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class ComparisonVerdict:
+    """Every ordering of one comparison, with a one-line summary."""
+
+    comparison: Comparison
+    claims: tuple[ClaimVerdict, ...]
+
+    @property
+    def summary(self) -> str:
+        """``holds``, ``does not hold``, ``undecided`` or ``not measured``, with the counts."""
+        counts = {o: sum(c.outcome == o for c in self.claims)
+                  for o in ("holds", "reversed", "tie", "not measured")}
+        judged = len(self.claims) - counts["not measured"]
+        if judged == 0:
+            return "not measured"
+        extra = [f"{counts[o]} {word}" for o, word in (("tie", f"within {TIE_DB:g} dB"),
+                                                        ("not measured", "not measured"))
+                 if counts[o]]
+        tail = f" ({'; '.join(extra)})" if extra else ""
+        if counts["reversed"]:
+            return f"does not hold: {counts['reversed']} of {judged} orderings reversed{tail}"
+        if counts["tie"]:
+            return f"undecided: {counts['holds']} of {judged} orderings as in the paper{tail}"
+        return f"holds: all {judged} orderings as in the paper{tail}"
+
+
+def _pair(a: float, b: float) -> str:
+    return f"{fmt(a)} vs {fmt(b)}"
+
+
+def explain_difference(better: RunRow, worse: RunRow) -> str:
+    """Measured differences between two runs, per component, for a reversed ordering.
+
+    Names the training effort (steps, seconds, rays per second), the LDR PSNR difference at every
+    test exposure (dark to bright; only when both runs were tested at the same exposures), the fit
+    to the blurry input frames and the HDR score before scale alignment; each as ``better`` vs
+    ``worse`` in the paper's ranking.
+    """
+    parts = [
+        f"training {better.steps} vs {worse.steps} steps in {fmt(better.train_s, 0)} vs "
+        f"{fmt(worse.train_s, 0)} s ({fmt(better.rays_per_s, 0)} vs {fmt(worse.rays_per_s, 0)} "
+        "rays/s)"
+    ]
+    same_exposures = [e for e, _ in better.ldr_psnr] == [e for e, _ in worse.ldr_psnr]
+    if better.ldr_psnr and same_exposures:
+        deltas = ", ".join(f"{e:g} s {a - b:+.2f}" for (e, a), (_, b)
+                           in zip(better.ldr_psnr, worse.ldr_psnr, strict=True))
+        parts.append(f"LDR PSNR difference per test exposure: {deltas} dB")
+    if math.isfinite(better.fit_psnr) or math.isfinite(worse.fit_psnr):  # none before 1st eval
+        parts.append(f"fit to the blurry input frames {_pair(better.fit_psnr, worse.fit_psnr)} dB")
+    parts.append("HDR PSNR before scale alignment "
+                 f"{_pair(better.hdr_unaligned_psnr, worse.hdr_unaligned_psnr)} dB")
+    return "; ".join(parts)
+
+
+def judge(comparison: Comparison, rows: dict[str, RunRow | None]) -> ComparisonVerdict:
+    """Check each of the paper's orderings on our HDR PSNR.
+
+    Args:
+        comparison: the paper's comparison.
+        rows: our run for each row key of the comparison (None or failed: not measured).
+    """
+    verdicts = []
+    for claim in paper_claims(comparison):
+        better, worse = rows.get(claim.better), rows.get(claim.worse)
+        if better is None or worse is None or not (better.ok and worse.ok):
+            verdicts.append(ClaimVerdict(claim, "not measured"))
+            continue
+        gap = better.hdr_psnr - worse.hdr_psnr
+        outcome = "tie" if abs(gap) < TIE_DB else "holds" if gap > 0 else "reversed"
+        reason = "" if outcome == "holds" else explain_difference(better, worse)
+        verdicts.append(ClaimVerdict(claim, outcome, better.hdr_psnr, worse.hdr_psnr, reason))
+    return ComparisonVerdict(comparison, tuple(verdicts))
