@@ -1,4 +1,4 @@
-"""Parsing of durations given on the command line (seconds by default, ``ms`` and ``us`` too)."""
+"""Parsing of durations given on the command line (seconds by default; us, ms, s, m, min, h)."""
 
 from __future__ import annotations
 
@@ -8,12 +8,21 @@ from davis_io.errors import UsageError
 
 __all__ = ["parse_duration_us"]
 
-_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|ms|us|µs)?\s*$")
-_SCALE_US = {None: 1_000_000, "s": 1_000_000, "ms": 1_000, "us": 1, "µs": 1}
+_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|ms|us|µs|m|min|h)?\s*$")
+_SCALE_US = {
+    None: 1_000_000,
+    "s": 1_000_000,
+    "ms": 1_000,
+    "us": 1,
+    "µs": 1,
+    "m": 60_000_000,
+    "min": 60_000_000,
+    "h": 3_600_000_000,
+}
 
 
 def parse_duration_us(text: str, *, what: str = "duration") -> int:
-    """Parse ``"0.15"``, ``"0.15s"``, ``"150ms"`` or ``"150000us"`` into whole microseconds.
+    """Parse ``"0.15"``, ``"150ms"``, ``"150000us"``, ``"10m"`` or ``"1.5h"`` into whole µs.
 
     Args:
         text: the value as typed; a bare number is in seconds.
@@ -28,8 +37,8 @@ def parse_duration_us(text: str, *, what: str = "duration") -> int:
     match = _DURATION.match(str(text))
     if not match:
         raise UsageError(
-            f"{what} {text!r} is not a duration: give seconds (0.15), milliseconds (150ms) "
-            "or microseconds (150000us)"
+            f"{what} {text!r} is not a duration: give seconds (0.15), milliseconds (150ms), "
+            "microseconds (150000us), minutes (10m) or hours (1.5h)"
         )
     value_us = round(float(match.group(1)) * _SCALE_US[match.group(2)])
     if value_us <= 0:

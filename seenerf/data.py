@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from davis_io.emulator.colorfilter import filter_weights
+from davis_io.colorfilter import filter_weights
 from davis_io.types import ColorFilter
 from seenerf.errors import TrainingDataError
 

@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from davis_io.colorfilter import LUMINANCE_WEIGHTS, filter_weights
+from davis_io.colorfilter import LUMINANCE_WEIGHTS
 from davis_io.types import ColorFilter
 
-__all__ = ["filter_weights", "sensor_channels", "through_filter"]
-# filter_weights lives in davis_io.colorfilter; it stays importable here for existing callers.
+__all__ = ["sensor_channels", "through_filter"]
 
 
 def through_filter(radiance: np.ndarray, weights: np.ndarray) -> np.ndarray:

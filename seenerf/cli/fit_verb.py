@@ -14,21 +14,11 @@ HELP = "fit See-NeRF to a session (poses if missing): sharp HDR renders, LDR bra
 
 
 def parse_budget_s(text: str) -> float:
-    """Seconds of a budget: ``10m``, ``1.5h``, ``90s``, ``90`` or what ``parse_duration_us`` reads.
+    """Seconds of a budget: ``10m``, ``1.5h``, ``90s``, ``90`` (see ``parse_duration_us``).
 
     Raises:
         UsageError: not a positive duration.
     """
-    text = str(text).strip()
-    for suffix, seconds in (("min", 60.0), ("h", 3600.0), ("m", 60.0)):
-        if text.endswith(suffix) and not text.endswith("ms"):
-            try:
-                value = float(text[: -len(suffix)]) * seconds
-            except ValueError:
-                break
-            if value > 0:
-                return value
-            break
     return parse_duration_us(text, what="--time-budget") / 1e6
 
 
