@@ -134,14 +134,23 @@ class RadianceRenderer(nn.Module):
         return [coarse_pass, fine_pass]
 
     def _to_box(self, origins: torch.Tensor, directions: torch.Tensor):
+        """``t (R, N) -> (R, N, 3)`` box coordinates, the box's affine map folded into each ray."""
+        box_origins, box_directions = self._box_rays(origins, directions)
+
         def to_box(t: torch.Tensor) -> torch.Tensor:
-            return self.box.normalise(origins[:, None] + t[..., None] * directions[:, None])
+            return torch.addcmul(box_origins[:, None], t[..., None], box_directions[:, None])
 
         return to_box
 
+    def _box_rays(self, origins: torch.Tensor, directions: torch.Tensor):
+        """Origins in box coordinates and directions scaled to box units per ray parameter."""
+        scale = 2.0 / (origins.new_tensor(self.box.high) - origins.new_tensor(self.box.low))
+        return self.box.normalise(origins), directions * scale
+
     def _points(self, samples: PackedSamples, origins, directions):
         index = samples.ray_index
-        points = self.box.normalise(origins[index] + samples.t[:, None] * directions[index])
+        box_origins, box_directions = self._box_rays(origins, directions)
+        points = torch.addcmul(box_origins[index], samples.t[:, None], box_directions[index])
         unit = directions / directions.norm(dim=-1, keepdim=True)
         box_delta = samples.delta * directions.norm(dim=-1)[index] * 2.0 / self.box.size
         return points, unit[index], box_delta
@@ -187,7 +196,9 @@ class RadianceRenderer(nn.Module):
         points, unit, box_delta = self._points(samples, origins, directions)
         density, log_radiance = field(points, unit)
         density = self._noisy(density, generator)
-        weights, opacity = sample_weights(density, box_delta, samples.ray_index, len(origins))
+        weights, opacity = sample_weights(
+            density, box_delta, samples.ray_index, len(origins), samples.per_ray
+        )
         return self._finish(
             weights,
             opacity,
@@ -212,7 +223,9 @@ class RadianceRenderer(nn.Module):
         density[keep] = self.fields[0].density(points[keep])
         box_delta = delta * directions.norm(dim=-1, keepdim=True) * 2.0 / self.box.size
         packed = PackedSamples.from_dense(t, box_delta)
-        weights, _ = sample_weights(density, packed.delta, packed.ray_index, len(origins))
+        weights, _ = sample_weights(
+            density, packed.delta, packed.ray_index, len(origins), packed.per_ray
+        )
         fine_t, fine_delta = importance_samples(
             t, delta, weights.reshape(t.shape), fine, generator, merge=False
         )
@@ -225,7 +238,9 @@ class RadianceRenderer(nn.Module):
         field = self.fields[0]
         points, unit, box_delta = self._points(samples, origins, directions)
         density = self._noisy(field.density(points), generator)
-        weights, _ = sample_weights(density, box_delta, samples.ray_index, len(origins))
+        weights, _ = sample_weights(
+            density, box_delta, samples.ray_index, len(origins), samples.per_ray
+        )
         keep = weights.detach() > WEIGHT_CUTOFF
         index = samples.ray_index[keep]
         kept = weights[keep]

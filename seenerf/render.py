@@ -11,7 +11,11 @@ MAX_OPTICAL_DEPTH = 30.0
 
 
 def sample_weights(
-    density: torch.Tensor, delta: torch.Tensor, ray_index: torch.Tensor, num_rays: int
+    density: torch.Tensor,
+    delta: torch.Tensor,
+    ray_index: torch.Tensor,
+    num_rays: int,
+    per_ray: int = 0,
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """Blending weights ``T_i (1 - exp(-sigma_i delta_i))`` of samples packed ray after ray.
 
@@ -20,18 +24,25 @@ def sample_weights(
         delta: ``(S,)`` sample interval lengths in box units.
         ray_index: ``(S,)`` int64 ray of each sample, non-decreasing.
         num_rays: R.
+        per_ray: samples of every ray when all rays have the same count (``S == R * per_ray``);
+            0 for a ragged packing. The equal-count case takes a per-row cumulative sum.
 
     Returns:
         ``weights`` ``(S,)`` and ``opacity`` ``(R,)`` = sum of the weights of each ray (0 for a
         ray without samples).
     """
     optical = (density * delta).clamp(0.0, MAX_OPTICAL_DEPTH)
+    if per_ray > 0 and optical.numel() == num_rays * per_ray:
+        rows = optical.reshape(num_rays, per_ray)
+        before = torch.cumsum(rows, dim=1) - rows
+        weights = (torch.exp(-before) * (1.0 - torch.exp(-rows))).reshape(-1)
+        return weights, weights.reshape(num_rays, per_ray).sum(dim=1)
     # Transmittance from an exclusive cumulative sum per ray, accumulated in float64 so that
     # long packed batches do not lose the small per-ray differences.
     running = torch.cumsum(optical.double(), dim=0)
-    per_ray = torch.zeros(num_rays, dtype=torch.float64, device=density.device)
-    per_ray.index_add_(0, ray_index, optical.double())
-    ray_offset = torch.cumsum(per_ray, dim=0) - per_ray
+    per_ray_sum = torch.zeros(num_rays, dtype=torch.float64, device=density.device)
+    per_ray_sum.index_add_(0, ray_index, optical.double())
+    ray_offset = torch.cumsum(per_ray_sum, dim=0) - per_ray_sum
     before = (running - optical.double() - ray_offset[ray_index]).clamp(min=0.0).float()
     weights = torch.exp(-before) * (1.0 - torch.exp(-optical))
     opacity = torch.zeros(num_rays, dtype=weights.dtype, device=weights.device)

@@ -17,18 +17,20 @@ class PackedSamples:
         ray_index: ``(S,)`` int64 ray of each sample, non-decreasing.
         t: ``(S,)`` ray parameter (depth) of each sample.
         delta: ``(S,)`` interval length represented by each sample, in ray-parameter units.
+        per_ray: samples of every ray when all rays have the same count, 0 when ragged.
     """
 
     ray_index: torch.Tensor
     t: torch.Tensor
     delta: torch.Tensor
+    per_ray: int = 0
 
     @staticmethod
     def from_dense(t: torch.Tensor, delta: torch.Tensor) -> PackedSamples:
         """Pack ``(R, N)`` samples, N per ray."""
         rays, count = t.shape
         index = torch.arange(rays, device=t.device).repeat_interleave(count)
-        return PackedSamples(index, t.reshape(-1), delta.reshape(-1))
+        return PackedSamples(index, t.reshape(-1), delta.reshape(-1), count)
 
 
 def stratified_samples(
@@ -130,7 +132,7 @@ class OccupancyGrid:
     def update(self, density_fn, generator: torch.Generator | None = None, decay: float = 0.95):
         """Refresh from ``density_fn(points (P, 3)) -> (P,)`` density per box unit."""
         points = self.centres(generator)
-        density = torch.cat([density_fn(chunk) for chunk in points.split(262144)]).cpu()
+        density = torch.cat([density_fn(chunk) for chunk in points.split(32768)]).cpu()
         density = density.reshape(self.density.shape)
         previous = torch.where(torch.isinf(self.density), density, self.density * decay)
         self.density = torch.maximum(previous, density)
@@ -140,10 +142,12 @@ class OccupancyGrid:
 
     def lookup(self, points: torch.Tensor) -> torch.Tensor:
         """Occupancy ``(P,)`` bool of box points; points outside the box are empty."""
-        index = ((points + 1.0) * 0.5 * self.resolution).floor().long()
-        inside = ((index >= 0) & (index < self.resolution)).all(dim=-1)
-        index = index.clamp(0, self.resolution - 1)
-        occupied = self.occupied.to(points.device)[index[:, 0], index[:, 1], index[:, 2]]
+        side = self.resolution
+        index = ((points + 1.0) * (0.5 * side)).floor().long()
+        inside = ((index >= 0) & (index < side)).all(dim=-1)
+        index = index.clamp_(0, side - 1)
+        flat = (index[:, 0] * side + index[:, 1]) * side + index[:, 2]
+        occupied = self.occupied.to(points.device).reshape(-1).take(flat)
         return occupied & inside
 
     def sample(

@@ -16,13 +16,13 @@ IDENTITY = Similarity(1.0, np.eye(3), np.zeros(3))
 """The similarity of a fit trained in the truth frame (the oracle)."""
 
 
-@torch.no_grad()
+@torch.inference_mode()
 def render_log_image(
     model: SeeNerfModel,
     c2w: np.ndarray,
     intrinsics: np.ndarray,
     image_size: tuple[int, int],
-    chunk: int = 32768,
+    chunk: int = 4096,
 ) -> np.ndarray:
     """Rendered log radiance ``(H, W, 3)`` of one camera, in chunks of rays.
 
@@ -31,7 +31,8 @@ def render_log_image(
         c2w: ``(4, 4)`` camera-to-world in the model's frame, OpenCV axes.
         intrinsics: fx, fy, cx, cy.
         image_size: ``(height, width)``.
-        chunk: rays per rendering call.
+        chunk: rays per rendering call; a few thousand keep the per-sample tensors in cache
+            (32k-ray chunks were up to 9x slower on two busy cores).
     """
     height, width = image_size
     parameter = next(model.parameters())

@@ -39,17 +39,49 @@ def machine() -> str:
     )
 
 
-def rays_per_second(data, preset: str, steps: int, pixels: int) -> float:
+SPEED_BATCH_PIXELS = {"fast": 256, "balanced": 256, "paper": 32}
+"""Blurry pixels per step of each preset in the speed table (the paper preset's MLP is slow)."""
+
+
+def speed_trainer(data, preset: str) -> Trainer:
+    """A trainer of ``preset`` without CRF warm start or held-out pixels, for timing steps."""
     config = FitConfig(
-        preset=preset, steps=steps, batch_pixels=pixels, warm_steps=0, validation_share=0.0
+        preset=preset,
+        steps=1,
+        batch_pixels=SPEED_BATCH_PIXELS[preset],
+        warm_steps=0,
+        validation_share=0.0,
     )
-    return Trainer(data, config, log=lambda line: None).train().rays_per_s
+    return Trainer(data, config, log=lambda line: None)
 
 
-def speed_table(data, steps: int) -> dict:
-    """Rays per second of each preset on the same data in the same process."""
-    table = {name: rays_per_second(data, name, steps, 256) for name in ("fast", "balanced")}
-    table["paper"] = rays_per_second(data, "paper", max(2, steps // 10), 32)
+def timed_steps(trainer: Trainer, steps: int) -> tuple[int, float]:
+    """Train ``steps`` more steps; return the rays rendered and the seconds taken."""
+    trainer.total_steps = trainer.summary.steps + steps
+    start = time.perf_counter()
+    trainer.train()
+    rays_per_step = trainer.preset.pixels_per_step * (trainer.data.num_bins + 1)
+    return steps * rays_per_step, time.perf_counter() - start
+
+
+def speed_table(data, steps: int, rounds: int = 3) -> dict:
+    """Rays per second of each preset on the same data, warmed up and timed side by side.
+
+    Every preset first trains two untimed steps (allocator, thread pool and autograd warm-up).
+    Then ``rounds`` rounds each time ``steps`` steps of every preset in turn (``steps // 10``,
+    at least 1, for the paper preset), so machine load that changes during the run falls on all
+    presets alike; the rate is the total rays over the total seconds of each preset.
+    """
+    trainers = {name: speed_trainer(data, name) for name in SPEED_BATCH_PIXELS}
+    for trainer in trainers.values():
+        timed_steps(trainer, 2)
+    totals = {name: [0, 0.0] for name in trainers}
+    for _ in range(rounds):
+        for name, trainer in trainers.items():
+            rays, seconds = timed_steps(trainer, steps if name != "paper" else max(1, steps // 10))
+            totals[name][0] += rays
+            totals[name][1] += seconds
+    table = {name: rays / max(seconds, 1e-9) for name, (rays, seconds) in totals.items()}
     table["fast_over_paper"] = table["fast"] / table["paper"]
     return table
 

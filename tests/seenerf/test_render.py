@@ -33,6 +33,29 @@ def test_transmittance_restarts_for_every_ray_in_a_long_packed_batch():
     assert torch.allclose(opacity, torch.ones(rays))
 
 
+def test_equal_count_weights_match_the_ragged_packing():
+    # The per-row cumulative sum (per_ray > 0) must give the ragged float64 path's weights.
+    generator = torch.Generator().manual_seed(3)
+    rays, per_ray = 500, 24
+    density = torch.rand(rays * per_ray, generator=generator) * 20.0
+    delta = torch.rand(rays * per_ray, generator=generator) * 0.1
+    index = torch.arange(rays).repeat_interleave(per_ray)
+    ragged, ragged_opacity = sample_weights(density, delta, index, rays)
+    dense, dense_opacity = sample_weights(density, delta, index, rays, per_ray)
+    assert torch.allclose(dense, ragged, atol=1e-6)
+    assert torch.allclose(dense_opacity, ragged_opacity, atol=1e-6)
+    # first sample of each ray: T = 1, so its weight is 1 - exp(-sigma delta)
+    first = 1.0 - torch.exp(-(density * delta).reshape(rays, per_ray)[:, 0])
+    assert torch.allclose(dense.reshape(rays, per_ray)[:, 0], first, atol=1e-7)
+
+
+def test_equal_count_weights_of_no_rays_are_empty():
+    weights, opacity = sample_weights(
+        torch.zeros(0), torch.zeros(0), torch.zeros(0, dtype=torch.long), 0, 8
+    )
+    assert len(weights) == 0 and len(opacity) == 0
+
+
 def test_ray_missing_the_box_gets_an_empty_interval():
     box = SceneBox((-1.0, -1.0, -1.0), (1.0, 1.0, 1.0))
     origins = torch.tensor([[0.0, 0.0, -3.0], [0.0, 5.0, -3.0]])
