@@ -78,13 +78,29 @@ def _default_registers(color_filter: ColorFilter) -> dict[tuple[int, int], int]:
     return regs
 
 
+_STREAM_SWITCHES = (
+    (P.Module.USB, P.Usb.RUN),
+    (P.Module.MUX, P.Mux.RUN),
+    (P.Module.DVS, P.Dvs.RUN),
+    (P.Module.APS, P.Aps.RUN),
+    (P.Module.IMU, P.Imu.RUN_ACCELEROMETER),
+    (P.Module.IMU, P.Imu.RUN_GYROSCOPE),
+    (P.Module.IMU, P.Imu.RUN_TEMPERATURE),
+    (P.Module.EXTINPUT, P.ExtInput.RUN_DETECTOR),
+)
+"""Registers that must all be 1 for the emulated stream to flow (the end of dataStart)."""
+
+
 @dataclass
 class EmulatedDavis346:
     """One emulated camera: identity, a register file, a word stream and faults.
 
     The stream starts with a timestamp reset when TIMESTAMP_RUN goes from 0 to 1 and flows while
-    USB RUN and MUX RUN are 1. A host-requested TIMESTAMP_RESET is logged, not acted on: the
-    source's clock cannot restart mid-encoding; ``StreamFaults.reset_at_us`` emulates resets.
+    USB RUN, MUX RUN and every producer the source feeds (DVS, APS, IMU, external input) are 1,
+    i.e. once the host's start sequence is complete: the recorded words interleave all kinds, so
+    they cannot flow while part of the sensor is still off. A host-requested TIMESTAMP_RESET is
+    logged, not acted on: the source's clock cannot restart mid-encoding;
+    ``StreamFaults.reset_at_us`` emulates resets.
 
     Args:
         source: packets to stream (a recording or the emulator); None streams nothing.
@@ -196,8 +212,7 @@ class EmulatedDavis346:
         self._exhausted = self._producer is None
 
     def _streaming(self) -> bool:
-        return bool(self.read_register(P.Module.USB, P.Usb.RUN)
-                    and self.read_register(P.Module.MUX, P.Mux.RUN))
+        return all(self.read_register(module, param) for module, param in _STREAM_SWITCHES)
 
     def _refill(self, wanted: int) -> None:
         while len(self._buffer) - self._offset < wanted and not self._exhausted:
