@@ -41,6 +41,8 @@ class FitConfig:
         threads: torch CPU threads (0: torch's default).
         batch_pixels: blurry pixels per step (0: the preset's).
         warm_steps: CRF warm-start steps (-1: the preset's, the reference's 500).
+        register_test_views: before scoring a fit made from estimated poses, refine each
+            held-out pose against its image (scores at the unrefined poses are kept too).
     """
 
     preset: str = "fast"
@@ -63,6 +65,7 @@ class FitConfig:
     threads: int = 0
     batch_pixels: int = 0
     warm_steps: int = -1
+    register_test_views: bool = True
 
     def validate(self) -> FitConfig:
         """Check names and ranges; return self.

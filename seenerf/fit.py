@@ -18,6 +18,7 @@ from seenerf.model import SeeNerfModel
 from seenerf.scoring import (
     PAPER_EXPOSURES_S,
     plot_crf,
+    register_test_poses,
     render_views,
     score_views,
     test_poses_in_fit_frame,
@@ -25,6 +26,7 @@ from seenerf.scoring import (
 )
 from seenerf.session_data import load_training_data
 from seenerf.trainer import Trainer, TrainSummary
+from seenerf.views import IDENTITY
 
 __all__ = ["FitResult", "ensure_poses", "fit_data", "fit_session", "render_outputs"]
 
@@ -158,6 +160,17 @@ def render_outputs(
         else PAPER_EXPOSURES_S
     )
     monochrome = bool(data.test is not None and data.test.hdr.shape[-1] == 1)
+    registration = None
+    if config.register_test_views and data.test is not None and similarity is not IDENTITY:
+        mapped = score_views(
+            render_views(model, poses, data.intrinsics, data.image_size, exposures, monochrome),
+            data,
+        )
+        poses, registration = register_test_poses(model, data, poses)
+        registration["at_mapped_poses"] = {
+            "hdr_psnr": mapped["hdr"]["psnr"],
+            "novel_exposure_psnr": mapped["novel_exposure"]["psnr"],
+        }
     views = render_views(model, poses, data.intrinsics, data.image_size, exposures, monochrome)
     write_views(
         views,
@@ -179,4 +192,5 @@ def render_outputs(
     }
     if data.test is not None:
         metrics.update(score_views(views, data))
+        metrics["test_poses"] = registration or {"registered": False}
     return metrics

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from davis_io.poses.align import Similarity
+from davis_io.poses.align import Similarity, rotation_error_deg
 from seenerf.data import TrainingData
 from seenerf.evaluate import align_channel_scale, hdr_metrics, ldr_metrics
 from seenerf.export import (
@@ -21,12 +21,14 @@ from seenerf.export import (
     write_png,
 )
 from seenerf.model import SeeNerfModel
+from seenerf.registration import register_view
 from seenerf.views import IDENTITY, render_log_image, truth_to_fit_frame
 
 __all__ = [
     "PAPER_EXPOSURES_S",
     "RenderedViews",
     "plot_crf",
+    "register_test_poses",
     "render_views",
     "score_views",
     "test_poses_in_fit_frame",
@@ -140,6 +142,41 @@ def test_poses_in_fit_frame(
         return data.c2w[:, 0], IDENTITY
     similarity = IDENTITY if trained_in_truth_frame else truth_to_fit_frame(data)
     return similarity.apply_poses(data.test.c2w).astype(np.float32), similarity
+
+
+def register_test_poses(
+    model: SeeNerfModel, data: TrainingData, c2w: np.ndarray
+) -> tuple[np.ndarray, dict]:
+    """Each held-out pose refined against its LDR image at the exposure nearest the training one.
+
+    Returns:
+        The refined ``(V, 4, 4)`` poses and a summary: the exposure used, how far the poses
+        turned (median and largest, degrees) and the seconds per view.
+    """
+    exposures = np.asarray(data.test.exposures_s, np.float64)
+    index = int(np.argmin(np.abs(np.log(exposures / model.reference_exposure_s))))
+    start = time.perf_counter()
+    refined = np.stack(
+        [
+            register_view(
+                model,
+                pose,
+                data.intrinsics,
+                data.test.ldr[view, index],
+                float(exposures[index]),
+                seed=view,
+            )
+            for view, pose in enumerate(c2w)
+        ]
+    )
+    turned = rotation_error_deg(np.asarray(c2w)[:, :3, :3], refined[:, :3, :3])
+    return refined, {
+        "registered": True,
+        "exposure_s": float(exposures[index]),
+        "turned_deg_median": float(np.median(turned)),
+        "turned_deg_max": float(np.max(turned)),
+        "s_per_view": (time.perf_counter() - start) / max(len(c2w), 1),
+    }
 
 
 def plot_crf(model: SeeNerfModel, data: TrainingData, views: RenderedViews, path: Path) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from davis_io.poses.align import Similarity, umeyama
+from davis_io.poses.align import Similarity, align_poses
 from seenerf.data import TrainingData
 from seenerf.model import SeeNerfModel
 from seenerf.rays import camera_rays
@@ -52,16 +52,16 @@ def render_log_image(
 
 
 def truth_to_fit_frame(data: TrainingData) -> Similarity:
-    """Similarity from the truth frame to the fit's (estimated) frame, from camera centres.
+    """Similarity from the truth frame to the fit's (estimated) frame, from centres and axes.
 
-    Fits Umeyama from the estimated latent camera centres to the true centres at the same
-    instants and inverts it. Without truth, or with fewer than three distinct centres, the
-    frames are taken to coincide.
+    Aligns the estimated latent poses to the true poses at the same instants (camera centres
+    and orientations, :func:`~davis_io.poses.align.align_poses`) and inverts the result.
+    Without truth, or with fewer than three distinct centres, the frames are taken to coincide.
     """
     if data.truth is None or data.truth.latent_c2w is None:
         return IDENTITY
-    estimated = data.c2w[..., :3, 3].reshape(-1, 3).astype(np.float64)
-    true = data.truth.latent_c2w[..., :3, 3].reshape(-1, 3).astype(np.float64)
-    if len(estimated) < 3 or np.allclose(estimated, estimated[0]):
+    estimated = data.c2w.reshape(-1, 4, 4).astype(np.float64)
+    true = data.truth.latent_c2w.reshape(-1, 4, 4).astype(np.float64)
+    if len(estimated) < 3 or np.allclose(estimated[:, :3, 3], estimated[0, :3, 3]):
         return IDENTITY
-    return umeyama(estimated, true).inverse()
+    return align_poses(estimated, true).inverse()

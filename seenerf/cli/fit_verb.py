@@ -58,6 +58,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fresh", action="store_true", help="start over instead of resuming")
     parser.add_argument("--seed", type=int, default=0, help="random seed")
     parser.add_argument("--threads", type=int, default=0, help="CPU threads (default: torch's)")
+    parser.add_argument(
+        "--no-registration",
+        action="store_true",
+        help="score held-out views at their similarity-mapped poses without refining them",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -77,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
         low_pass=args.low_pass,
         seed=args.seed,
         threads=args.threads,
+        register_test_views=not args.no_registration,
     )
     result = fit_session(args.session, config, run_name=args.run, fresh=args.fresh)
     print(f"run: {result.run_dir}")
@@ -103,6 +109,14 @@ def format_scores(metrics: dict) -> str:
         for exposure, score in metrics.get("ldr", {}).items():
             lines.append(
                 f"  LDR {exposure:>8} s: PSNR {score['psnr']:.2f} dB  SSIM {score['ssim']:.4f}"
+            )
+        poses = metrics.get("test_poses", {})
+        if poses.get("registered"):
+            mapped = poses["at_mapped_poses"]
+            lines.append(
+                f"held-out poses registered to the model (turned {poses['turned_deg_median']:.2f} "
+                f"deg median); at the mapped poses: HDR {mapped['hdr_psnr']:.2f} dB, "
+                f"novel {mapped['novel_exposure_psnr']:.2f} dB"
             )
     else:
         lines.append("no ground truth: renders written, nothing scored")
