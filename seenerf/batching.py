@@ -117,6 +117,11 @@ class OracleSampler:
         """``(origins, directions, hdr)`` of ``count`` random truth pixels."""
         images, height, width = self.hdr.shape[:3]
         flat = torch.randint(images * height * width, (count,), generator=generator)
+        return self.pixels(flat)
+
+    def pixels(self, flat: torch.Tensor):
+        """``(origins, directions, hdr)`` of truth pixels at flat ``image * H * W + pixel``."""
+        height, width = self.hdr.shape[1:3]
         image, pixel = flat // (height * width), flat % (height * width)
         v, u = pixel // width, pixel % width
         origins, directions = camera_rays(self.c2w[image], self.intrinsics, u.float(), v.float())

@@ -18,7 +18,14 @@ from seenerf.checkpoint import load_checkpoint, save_checkpoint
 from seenerf.config import FitConfig
 from seenerf.data import TrainingData
 from seenerf.evaluate import psnr
-from seenerf.losses import LossWeights, event_loss, ldr_loss, oracle_hdr_loss, total_loss
+from seenerf.losses import (
+    LossWeights,
+    event_loss,
+    hdr_tone_map,
+    ldr_loss,
+    oracle_hdr_loss,
+    total_loss,
+)
 
 __all__ = ["TrainSummary", "Trainer"]
 
@@ -209,9 +216,14 @@ class Trainer:
 
     @torch.no_grad()
     def validation_psnr(self) -> float:
-        """LDR PSNR of the held-out training pixels (blurry reproduction), dB."""
+        """LDR PSNR of the held-out training pixels (blurry reproduction), dB.
+
+        For the oracle: tone-mapped HDR PSNR of the same pixel indices in its sharp truth images.
+        """
         if len(self.validation) == 0:
             return math.nan
+        if self.oracle is not None:
+            return self._oracle_validation_psnr()
         predicted = []
         for chunk in self.validation.split(2048):
             batch = self.frames.batch_flat(chunk)
@@ -219,6 +231,23 @@ class Trainer:
         return psnr(
             torch.cat([p for p, _ in predicted]).numpy(),
             torch.cat([t for _, t in predicted]).numpy(),
+        )
+
+    def _oracle_validation_psnr(self) -> float:
+        pairs = []
+        total = self.oracle.hdr.shape[0] * self.oracle.hdr.shape[1] * self.oracle.hdr.shape[2]
+        for chunk in (self.validation % total).split(2048):
+            origins, directions, hdr = self.oracle.pixels(chunk.to(self.oracle.hdr.device))
+            log_radiance = self.model.render_log_radiance(origins, directions)
+            pairs.append(
+                (
+                    hdr_tone_map(torch.exp(log_radiance.clamp(max=60.0)), self.oracle.scale),
+                    hdr_tone_map(hdr, self.oracle.scale),
+                )
+            )
+        return psnr(
+            torch.cat([p for p, _ in pairs]).cpu().numpy(),
+            torch.cat([t for _, t in pairs]).cpu().numpy(),
         )
 
     def _evaluate(self, start_step: int, start: float) -> bool:
