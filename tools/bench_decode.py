@@ -5,6 +5,8 @@ into an LZ4 AEDAT 4.0 file of at least 5 M events, packet for packet as recorded
 read the whole file, best of N runs each, interleaved.
 
     python tools/bench_decode.py [--quick] [--events N] [--repeats R]
+
+Other tools call :func:`run`, which returns the printed numbers as a dict.
 """
 
 from __future__ import annotations
@@ -70,29 +72,75 @@ def best_rate(decode, path: Path, expected: int, repeats: int) -> float:
     return expected / best
 
 
+def run(
+    quick: bool,
+    *,
+    events: int | None = None,
+    repeats: int | None = None,
+    command: str | None = None,
+) -> dict:
+    """Measure both decoders on one temporary file and return the numbers ``main`` prints.
+
+    Args:
+        quick: 5 M events, best of 3 (else 20 M events, best of 5).
+        events: minimum events in the file, overriding ``quick``.
+        repeats: runs per decoder, overriding ``quick``.
+        command: the command line to report (default: ``bench_decode.py`` with ``--quick``).
+
+    Returns:
+        ``events``, ``file_mb``, ``repeats``, ``ours_ev_s``, ``dv_ev_s``, ``ratio`` (ours /
+        dv-processing), ``command`` and ``machine``.
+    """
+    min_events = events or (5_000_000 if quick else 20_000_000)
+    repeats = repeats or (3 if quick else 5)
+    if command is None:
+        command = " ".join(
+            [Path(sys.executable).name, "tools/bench_decode.py", *(["--quick"] if quick else [])]
+        )
+    machine = (
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, numpy {np.__version__}"
+    )
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "repeated.aedat4"
+        total = build_file(path, min_events)
+        file_mb = path.stat().st_size / 1e6
+        ours_rates, dv_rates = [], []
+        for _ in range(repeats):  # interleave so both see the same machine load
+            ours_rates.append(best_rate(decode_ours, path, total, 1))
+            dv_rates.append(best_rate(decode_dv, path, total, 1))
+    ours, theirs = max(ours_rates), max(dv_rates)
+    return {
+        "events": total,
+        "file_mb": file_mb,
+        "repeats": repeats,
+        "ours_ev_s": ours,
+        "dv_ev_s": theirs,
+        "ratio": ours / theirs,
+        "command": command,
+        "machine": machine,
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="5 M events, best of 3")
     parser.add_argument("--events", type=int, default=None, help="minimum events in the file")
     parser.add_argument("--repeats", type=int, default=None, help="runs per decoder")
     args = parser.parse_args()
-    min_events = args.events or (5_000_000 if args.quick else 20_000_000)
-    repeats = args.repeats or (3 if args.quick else 5)
-    print(f"command: {' '.join([Path(sys.executable).name, *sys.argv])}")
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"Python {platform.python_version()}, numpy {np.__version__}")
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "repeated.aedat4"
-        total = build_file(path, min_events)
-        print(f"file: {total:,} events, {path.stat().st_size / 1e6:.1f} MB, LZ4")
-        ours_rates, dv_rates = [], []
-        for _ in range(repeats):  # interleave so both see the same machine load
-            ours_rates.append(best_rate(decode_ours, path, total, 1))
-            dv_rates.append(best_rate(decode_dv, path, total, 1))
-    ours, theirs = max(ours_rates), max(dv_rates)
-    print(f"ours:          {ours / 1e6:8.1f} M events/s (best of {repeats})")
-    print(f"dv-processing: {theirs / 1e6:8.1f} M events/s (best of {repeats})")
-    print(f"ratio ours / dv-processing: {ours / theirs:.2f}")
+    result = run(
+        args.quick,
+        events=args.events,
+        repeats=args.repeats,
+        command=" ".join([Path(sys.executable).name, *sys.argv]),
+    )
+    print(f"command: {result['command']}")
+    print(f"machine: {result['machine']}")
+    print(f"file: {result['events']:,} events, {result['file_mb']:.1f} MB, LZ4")
+    repeats = result["repeats"]
+    print(f"ours:          {result['ours_ev_s'] / 1e6:8.1f} M events/s (best of {repeats})")
+    print(f"dv-processing: {result['dv_ev_s'] / 1e6:8.1f} M events/s (best of {repeats})")
+    print(f"ratio ours / dv-processing: {result['ratio']:.2f}")
 
 
 if __name__ == "__main__":

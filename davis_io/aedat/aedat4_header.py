@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import enum
+import functools
 import xml.etree.ElementTree as ElementTree
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import lz4.frame
@@ -19,6 +21,7 @@ from davis_io.aedat.flatbuf import (
     build_buffer,
     root_table,
 )
+from davis_io.aedat.lz4_frame import FrameDecompressor, decompress_frame
 
 __all__ = [
     "MAGIC",
@@ -31,6 +34,7 @@ __all__ = [
     "build_io_header",
     "compress",
     "decompress",
+    "packet_decompressor",
     "parse_data_table",
     "parse_info_node",
     "parse_io_header",
@@ -88,13 +92,25 @@ def decompress(compression: Compression, data: bytes) -> bytes:
     """Decompress one packet payload (one complete LZ4 or Zstandard frame).
 
     Raises:
-        RuntimeError, zstandard.ZstdError: from the codec, for the caller to wrap.
+        RuntimeError, ValueError, zstandard.ZstdError: from the codec, for the caller to wrap.
     """
     if compression in (Compression.LZ4, Compression.LZ4_HIGH):
-        return lz4.frame.decompress(data)
+        return decompress_frame(data)
     if compression in (Compression.ZSTD, Compression.ZSTD_HIGH):
         return zstandard.ZstdDecompressor().decompressobj().decompress(data)
     return data
+
+
+def packet_decompressor(compression: Compression) -> Callable[[bytes], bytes | memoryview]:
+    """A :func:`decompress` for one reader's packets, decoded one after the other.
+
+    For LZ4 the result may be a view into a buffer that the next call overwrites (see
+    :class:`~davis_io.aedat.lz4_frame.FrameDecompressor`): decode it before decompressing the
+    next packet, and copy what must outlive it.
+    """
+    if compression in (Compression.LZ4, Compression.LZ4_HIGH):
+        return FrameDecompressor().decompress
+    return functools.partial(decompress, compression)
 
 
 def compress(compression: Compression, data: bytes) -> bytes:

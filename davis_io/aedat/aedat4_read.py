@@ -14,6 +14,7 @@ from davis_io.aedat.aedat4_header import (
     DataTableEntry,
     StreamDescription,
     decompress,
+    packet_decompressor,
     parse_data_table,
     parse_info_node,
     parse_io_header,
@@ -40,7 +41,9 @@ class Aedat4Reader(FileReader):
     """An AEDAT 4.0 file as a :class:`~davis_io.types.PacketSource`.
 
     The header is read on construction (so ``info`` is known at once); iteration walks the
-    packets from the start each time, reading one packet at a time.
+    packets from the start each time, reading one packet at a time. Each packet is
+    decompressed into a buffer reused for the next one (see :func:`packet_decompressor`) and
+    decoded into arrays of its own before the next is read.
 
     Attributes:
         info: camera, resolution and file facts (``extra``: format, compression, streams).
@@ -156,6 +159,7 @@ class Aedat4Reader(FileReader):
         except FormatError as error:
             raise FormatError(f"bad IOHeader: {error}", path=path, offset=len(MAGIC)) from None
         self.compression = header.compression
+        self._decompress = packet_decompressor(self.compression)
         self._data_start = len(MAGIC) + 4 + length
         self._data_end, self._header_notes = file_size, []
         self.data_table: list[DataTableEntry] | None = None
@@ -212,12 +216,11 @@ class Aedat4Reader(FileReader):
                           f"{entry.stream_id}", path=str(self.path), offset=entry.byte_offset)
 
     def _decode(self, index: int, offset: int, stream_id: int, payload: bytes) -> Packet:
-        """Decompress and decode one packet of a known stream type."""
+        """Decompress and decode one packet of a known stream type into arrays of its own."""
         stream = self.streams[stream_id]
         type_id = stream.type_identifier
         try:
-            buf = decompress(self.compression, payload)
-            return _DECODERS[type_id](stream, buf)
+            return _DECODERS[type_id](stream, self._decompress(payload))
         except (FormatError, *_CODEC_ERRORS) as error:
             message = error if isinstance(error, FormatError) else f"cannot decompress: {error}"
             raise FormatError(f"packet {index} (stream {stream_id}, {type_id}): {message}",

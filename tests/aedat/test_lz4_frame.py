@@ -7,7 +7,7 @@ import lz4.frame
 import numpy as np
 import pytest
 
-from davis_io.aedat import Aedat4Reader, Compression
+from davis_io.aedat import Aedat4Reader, Compression, write_aedat4
 from davis_io.aedat.aedat4_header import (
     MAGIC,
     IOHeader,
@@ -16,9 +16,14 @@ from davis_io.aedat.aedat4_header import (
     build_io_header,
 )
 from davis_io.aedat.aedat4_streams import encode_events
-from davis_io.aedat.lz4_frame import decompress_frame, frame_layout, header_checksum
+from davis_io.aedat.lz4_frame import (
+    FrameDecompressor,
+    decompress_frame,
+    frame_layout,
+    header_checksum,
+)
 from davis_io.errors import FormatError
-from davis_io.types import EVENT_DTYPE
+from davis_io.types import EVENT_DTYPE, Packet, SourceInfo
 
 EVENTS = StreamDescription(0, "EVTS", "events", 346, 260, "DAVIS346_1")
 FRAME_MAGIC = b"\x04\x22\x4d\x18"
@@ -162,3 +167,42 @@ def test_reader_names_the_packet_offset_of_a_bad_frame(tmp_path, damage):
         with pytest.raises(FormatError, match=f"byte offset {bad_offset}: packet 2 ") as caught:
             next(iterator)
     assert caught.value.offset == bad_offset
+
+
+def test_one_decompressor_reuses_its_buffer_across_frame_sizes():
+    decompressor = FrameDecompressor()
+    sizes = [350_000, 1_000, 200_000, 0, 350_000, 70_000]
+    for size in sizes:
+        data = REPEATED[size // 3 : size // 3 + size]
+        frame = lz4.frame.compress(data, store_size=False, block_linked=True)
+        assert frame_layout(frame) is not None
+        assert bytes(decompressor.decompress(frame)) == data  # nothing left from a longer frame
+
+
+def test_a_result_view_is_overwritten_by_the_next_call():
+    decompressor = FrameDecompressor()
+    first = decompressor.decompress(lz4.frame.compress(b"a" * 5000))
+    kept = bytes(first)
+    decompressor.decompress(lz4.frame.compress(b"b" * 5000))
+    assert kept == b"a" * 5000 and bytes(first) == b"b" * 5000  # the documented reuse
+
+
+@pytest.mark.parametrize("compression", [Compression.LZ4, Compression.NONE])
+def test_packets_read_earlier_keep_their_events(tmp_path, compression):
+    # Shrinking and growing packets: a packet that still pointed into the reused
+    # decompression buffer would show a later packet's events.
+    sizes = [9000, 200, 30_000, 5000, 30_000, 1]
+    packets = []
+    for i, size in enumerate(sizes):
+        events = np.zeros(size, dtype=EVENT_DTYPE)
+        events["t"] = 1_000_000 * i + np.arange(size)
+        events["x"] = i
+        events["p"] = np.where(np.arange(size) % 3 == 0, 1, -1)
+        packets.append(Packet(events=events))
+    info = SourceInfo(camera="DAVIS346", serial="1", width=346, height=260)
+    path = write_aedat4(packets, tmp_path / "sizes.aedat4", info, compression=compression)
+    with Aedat4Reader(path) as reader:
+        read = [p for p in reader if len(p.events)]
+    assert [len(p.events) for p in read] == sizes
+    for ours, written in zip(read, packets, strict=True):
+        assert np.array_equal(ours.events, written.events)
