@@ -10,10 +10,11 @@ import torch
 from seenerf.config import FitConfig
 from seenerf.data import TrainingData
 from seenerf.errors import ConfigError
+from seenerf.frustum import forward_facing_space, frustum_box
 from seenerf.model import SeeNerfModel
 from seenerf.presets import Preset, get_preset, size_field
 from seenerf.radiance import RadianceRenderer
-from seenerf.rays import SceneBox, in_any_view, scene_box_from_cameras
+from seenerf.rays import in_any_view, scene_box_from_cameras
 from seenerf.variants import LOW_PASS_READINGS, get_variant
 
 __all__ = ["build_model", "resolve_device", "training_poses"]
@@ -57,20 +58,35 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
     """The model and the preset resized for this scene (field resolution from extent and sensor)."""
     variant = get_variant(config.variant)
     poses = training_poses(data, config)
-    box: SceneBox = scene_box_from_cameras(poses, data.intrinsics, data.bounds, data.image_size)
-    median_depth = float(np.sqrt(data.bounds[0] * data.bounds[1]))
-    preset = size_field(
-        get_preset(config.preset), box.size, median_depth, float(data.intrinsics[0])
+    preset = get_preset(config.preset)
+    space = (
+        forward_facing_space(poses, data.intrinsics, data.bounds, data.image_size)
+        if preset.space == "auto"
+        else None
     )
-    renderer = RadianceRenderer(preset.field, preset.field_args, preset.sampler, box)
+    if space is not None:
+        box = frustum_box(space, poses, data.intrinsics, data.bounds, data.image_size)
+        view_bounds = np.array([space.near, 1.5 * float(data.bounds[1])])
+        preset = size_field(preset, box.size / 2.0 * data.image_size[1])  # image: 2 NDC units
+    else:
+        box = scene_box_from_cameras(poses, data.intrinsics, data.bounds, data.image_size)
+        view_bounds = data.bounds
+        median_depth = float(np.sqrt(data.bounds[0] * data.bounds[1]))
+        preset = size_field(preset, float(data.intrinsics[0]) * box.size / median_depth)
+    renderer = RadianceRenderer(preset.field, preset.field_args, preset.sampler, box, space)
     if renderer.grid is not None:
+
+        def to_world(points: torch.Tensor) -> torch.Tensor:
+            world = box.to_world(points)
+            return space.to_world(world) if space is not None else world
+
         renderer.grid.restrict_to_views(
             lambda points: torch.as_tensor(
                 in_any_view(
-                    box.to_world(points).numpy(),
+                    to_world(points).numpy(),
                     poses[:, :: max(1, poses.shape[1] - 1)],
                     data.intrinsics,
-                    data.bounds,
+                    view_bounds,
                     data.image_size,
                 )
             )

@@ -17,6 +17,7 @@ from seenerf.export import write_json
 from seenerf.model import SeeNerfModel
 from seenerf.scoring import (
     PAPER_EXPOSURES_S,
+    crf_error,
     plot_crf,
     register_test_poses,
     render_views,
@@ -125,6 +126,7 @@ def fit_data(
             "field_args": trainer.preset.field_args,
             "bins": data.num_bins,
             "box": {"low": trainer.model.renderer.box.low, "high": trainer.model.renderer.box.high},
+            "space": "ndc" if trainer.model.renderer.space is not None else "world",
         },
     )
     summary = trainer.train()
@@ -193,4 +195,5 @@ def render_outputs(
     if data.test is not None:
         metrics.update(score_views(views, data))
         metrics["test_poses"] = registration or {"registered": False}
+        metrics["crf_error"] = crf_error(model, data, views)
     return metrics

@@ -33,6 +33,8 @@ class Preset:
         patience: evaluations without improvement before an early stop (0 = never).
         max_resolution: cap of the resized field resolution.
         warm_steps: CRF warm-start steps (reference 500).
+        space: ``auto`` (a forward-facing scene in NDC, :mod:`seenerf.frustum`; any other in a
+            world box) or ``world`` (always a world box, as published).
     """
 
     description: str
@@ -50,6 +52,7 @@ class Preset:
     patience: int = 4
     max_resolution: int = 0
     warm_steps: int = 500
+    space: str = "auto"
 
 
 PRESETS: dict[str, Preset] = {
@@ -64,6 +67,7 @@ PRESETS: dict[str, Preset] = {
         lr_decay_steps=500000,
         eval_every=10000,
         patience=0,
+        space="world",
     ),
     "fast": Preset(
         "CPU default: vector-matrix field, occupancy-grid sampling, minutes on 2 cores",
@@ -110,20 +114,17 @@ def get_preset(name: str) -> Preset:
     return PRESETS[name]
 
 
-def size_field(preset: Preset, box_size: float, median_depth: float, focal_px: float) -> Preset:
+def size_field(preset: Preset, span_px: float) -> Preset:
     """Set a grid field's resolution from how many sensor pixels the scene box spans.
 
-    A texel finer than a pixel at the median depth cannot be constrained by the frames, so the
-    resolution is the box's pixel span at that depth, capped by ``max_resolution``.
+    A texel finer than a pixel cannot be constrained by the frames, so the resolution is the
+    box's pixel span, at least 48 and at most ``max_resolution``.
 
     Args:
         preset: a preset whose field has a ``resolution`` argument (others are returned as is).
-        box_size: side of the scene cube, world units.
-        median_depth: typical scene depth, world units.
-        focal_px: focal length in pixels.
+        span_px: sensor pixels across one side of the box (at the median depth for a world box).
     """
     if "resolution" not in preset.field_args or preset.max_resolution <= 0:
         return preset
-    span = focal_px * box_size / max(median_depth, 1e-6)
-    resolution = int(np.clip(span, 48, preset.max_resolution))
+    resolution = int(np.clip(span_px, 48, preset.max_resolution))
     return replace(preset, field_args={**preset.field_args, "resolution": resolution})

@@ -9,6 +9,7 @@ import torch
 from torch import nn
 
 from seenerf.fields import FIELDS
+from seenerf.frustum import FrustumSpace
 from seenerf.rays import SceneBox, intersect_box
 from seenerf.render import composite, sample_weights
 from seenerf.sampling import OccupancyGrid, PackedSamples, importance_samples, stratified_samples
@@ -72,13 +73,23 @@ class RadianceRenderer(nn.Module):
         field_name: key of :data:`seenerf.fields.FIELDS`.
         field_args: keyword arguments of the field class.
         sampler: the sampler specification.
-        box: the scene box.
+        box: the scene box, in world units or, with ``space``, in NDC.
+        space: the NDC of a forward-facing scene (rays are mapped into it first, and run from
+            the near plane to infinity), or None for world coordinates.
     """
 
-    def __init__(self, field_name: str, field_args: dict, sampler: SamplerSpec, box: SceneBox):
+    def __init__(
+        self,
+        field_name: str,
+        field_args: dict,
+        sampler: SamplerSpec,
+        box: SceneBox,
+        space: FrustumSpace | None = None,
+    ):
         super().__init__()
         self.sampler = sampler
         self.box = box
+        self.space = space
         fields = [FIELDS[field_name](**field_args)]
         if sampler.kind == "hierarchical":
             fields.append(FIELDS[field_name](**field_args))
@@ -99,7 +110,14 @@ class RadianceRenderer(nn.Module):
         value_fn: ValueFn | None = None,
         generator: torch.Generator | None = None,
     ) -> list[RenderedRays]:
-        """Render ``(R, 3)`` rays; ``generator`` set means training (jitter, density noise)."""
+        """Render ``(R, 3)`` world rays; ``generator`` set means training (jitter, density noise).
+
+        ``near`` and ``far`` bound the ray parameter in world depth; in NDC the rays run from
+        the space's near plane to infinity instead.
+        """
+        if self.space is not None:
+            origins, directions = self.space.rays(origins, directions)
+            near, far = 0.0, 1.0
         t_entry, t_exit = intersect_box(origins, directions, self.box, near, far)
         to_box = self._to_box(origins, directions)
         coarse, fine = self.sampler.counts(training=generator is not None)

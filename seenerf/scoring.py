@@ -27,6 +27,8 @@ from seenerf.views import IDENTITY, render_log_image, truth_to_fit_frame
 __all__ = [
     "PAPER_EXPOSURES_S",
     "RenderedViews",
+    "crf_error",
+    "learned_crf",
     "plot_crf",
     "register_test_poses",
     "render_views",
@@ -179,10 +181,16 @@ def register_test_poses(
     }
 
 
-def plot_crf(model: SeeNerfModel, data: TrainingData, views: RenderedViews, path: Path) -> None:
-    """The learned response beside the true one; the learned curve is shifted by the HDR scale."""
+def learned_crf(
+    model: SeeNerfModel, data: TrainingData, views: RenderedViews
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The learned response ``(x, (N, 3) values)`` on the truth's ln(radiance x s) axis.
+
+    The model's radiance is known up to the CRF anchor; its per-channel HDR scale against the
+    truth (when scored) shifts the curve onto the truth's axis. None without a CRF.
+    """
     if model.crf is None:
-        return
+        return None
     log_exposure = np.linspace(-8.0, 6.0, 141, dtype=np.float32)
     with torch.no_grad():
         values = model.crf(torch.as_tensor(log_exposure)[:, None].expand(-1, 3)).numpy()
@@ -190,10 +198,39 @@ def plot_crf(model: SeeNerfModel, data: TrainingData, views: RenderedViews, path
     if data.test is not None and views.hdr:
         scale = align_channel_scale(np.stack(views.hdr), data.test.hdr)
         shift = float(np.log(np.mean(scale)))
+    return log_exposure + shift, values
+
+
+def _true_crf(data: TrainingData) -> tuple[np.ndarray, np.ndarray] | None:
     truth = data.truth
-    true = (
-        (truth.crf_log_exposure, truth.crf_value)
-        if truth is not None and len(truth.crf_value)
-        else None
-    )
-    crf_plot(path, (log_exposure + shift, values), true)
+    if truth is None or not len(truth.crf_value):
+        return None
+    return np.asarray(truth.crf_log_exposure), np.asarray(truth.crf_value)
+
+
+def plot_crf(model: SeeNerfModel, data: TrainingData, views: RenderedViews, path: Path) -> None:
+    """The learned response beside the true one, when the model has one."""
+    learned = learned_crf(model, data, views)
+    if learned is not None:
+        crf_plot(path, learned, _true_crf(data))
+
+
+def crf_error(model: SeeNerfModel, data: TrainingData, views: RenderedViews) -> dict | None:
+    """RMS and largest difference of the learned and the true response, per channel.
+
+    Compared where the true response is between 0.01 and 0.99 (below and above, every curve
+    clips) and the learned curve was evaluated; None without a CRF or a true one.
+    """
+    learned, true = learned_crf(model, data, views), _true_crf(data)
+    if learned is None or true is None:
+        return None
+    (x, values), (true_x, true_values) = learned, true
+    inside = (true_x >= x[0]) & (true_x <= x[-1])
+    rms, largest = [], []
+    for channel in range(values.shape[1]):
+        reference = true_values[:, min(channel, true_values.shape[1] - 1)]
+        keep = inside & (reference > 0.01) & (reference < 0.99)
+        difference = np.interp(true_x[keep], x, values[:, channel]) - reference[keep]
+        rms.append(float(np.sqrt(np.mean(difference**2))) if keep.any() else float("nan"))
+        largest.append(float(np.max(np.abs(difference))) if keep.any() else float("nan"))
+    return {"rms": rms, "max": largest}

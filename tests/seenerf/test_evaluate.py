@@ -44,3 +44,26 @@ def test_channel_scale_alignment_recovers_white_balance():
 
 def test_empty_view_lists_score_nan():
     assert math.isnan(hdr_metrics([], [], align=True)["psnr"])
+
+
+def test_crf_error_is_zero_for_the_true_curve_and_grows_with_a_shift():
+    from types import SimpleNamespace
+
+    import torch
+
+    from seenerf.scoring import RenderedViews, crf_error
+    from seenerf.synthetic import plane_scene, true_response
+
+    scene = plane_scene(height=8, width=10, frames=2, b=2, test_views=0)
+    views = RenderedViews(np.zeros((0, 4, 4)), ())
+
+    def model_with(offset):
+        return SimpleNamespace(crf=lambda x: torch.as_tensor(true_response(x.numpy() + offset)))
+
+    exact = crf_error(model_with(0.0), scene, views)
+    assert max(exact["rms"]) < 2e-3  # only the interpolation between the 0.1-wide samples
+    shifted = crf_error(model_with(0.5), scene, views)
+    # By hand: the slope of (x / (x + 1)) ** (1 / 2.2) in ln x peaks at 0.184 (x / (x + 1) =
+    # 0.3125), so a shift of 0.5 moves the curve by up to about 0.09.
+    assert 0.04 < min(shifted["rms"]) and 0.08 < max(shifted["max"]) < 0.11
+    assert crf_error(SimpleNamespace(crf=None), scene, views) is None
