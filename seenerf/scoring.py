@@ -21,6 +21,7 @@ from seenerf.export import (
     write_png,
 )
 from seenerf.model import SeeNerfModel
+from seenerf.perceptual import lpips_scorer
 from seenerf.registration import register_view
 from seenerf.views import IDENTITY, render_log_image, truth_to_fit_frame
 
@@ -93,7 +94,8 @@ def score_views(views: RenderedViews, data: TrainingData) -> dict:
     """PSNR / SSIM of HDR (tone-mapped, per-channel scale aligned and raw) and of each LDR exposure.
 
     The novel-exposure score is the mean over the bracket's second and fourth exposures (the
-    paper's protocol); ``ldr_all`` averages all five.
+    paper's protocol). LPIPS is added per exposure only when its weights are on this machine;
+    ``lpips`` says which.
     """
     test = data.test
     truth_hdr = list(test.hdr)
@@ -102,8 +104,14 @@ def score_views(views: RenderedViews, data: TrainingData) -> dict:
         "hdr_unaligned": hdr_metrics(views.hdr, truth_hdr, align=False),
         "ldr": {},
     }
+    lpips, scores["lpips"] = lpips_scorer()
     for index, exposure in enumerate(views.exposures_s):
-        scores["ldr"][f"{exposure:g}"] = ldr_metrics(views.ldr[index], list(test.ldr[:, index]))
+        truth_ldr = list(test.ldr[:, index])
+        scores["ldr"][f"{exposure:g}"] = ldr_metrics(views.ldr[index], truth_ldr)
+        if lpips is not None:
+            scores["ldr"][f"{exposure:g}"]["lpips"] = float(
+                np.mean([lpips(p, t) for p, t in zip(views.ldr[index], truth_ldr, strict=True)])
+            )
     novel = [
         scores["ldr"][f"{views.exposures_s[i]:g}"] for i in (1, 3) if i < len(views.exposures_s)
     ]

@@ -107,9 +107,13 @@ def format_scores(metrics: dict) -> str:
             f"SSIM {novel['ssim']:.4f}"
         )
         for exposure, score in metrics.get("ldr", {}).items():
+            lpips = f"  LPIPS {score['lpips']:.4f}" if "lpips" in score else ""
             lines.append(
                 f"  LDR {exposure:>8} s: PSNR {score['psnr']:.2f} dB  SSIM {score['ssim']:.4f}"
+                + lpips
             )
+        if "lpips" in metrics:
+            lines.append(metrics["lpips"])
         poses = metrics.get("test_poses", {})
         if poses.get("registered"):
             mapped = poses["at_mapped_poses"]

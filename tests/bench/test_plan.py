@@ -1,8 +1,19 @@
-from benchlib.plan import FULL_BUDGETS_S, TABLE4_ROWS, make_plan
+from benchlib.plan import TABLE4_ROWS, make_plan, planned_rungs, planned_training_s
 
 PRESETS = ("paper", "fast", "balanced")
-VARIANTS = ("full", "no-events", "naive-events", "evdeblur-ecrf", "v2e-lowpass",
-            "deblur-e-lowpass", "power-crf", "point-crf-3d", "base", "multi-exposure", "oracle")
+VARIANTS = (
+    "full",
+    "no-events",
+    "naive-events",
+    "evdeblur-ecrf",
+    "v2e-lowpass",
+    "deblur-e-lowpass",
+    "power-crf",
+    "point-crf-3d",
+    "base",
+    "multi-exposure",
+    "oracle",
+)
 
 
 def test_quick_plan():
@@ -12,8 +23,9 @@ def test_quick_plan():
     # fast: the 7 quick variants, full climbs 20 s and 60 s, the others stop at 20 s;
     # balanced and paper are measured for speed only.
     assert len(plan.ladders) == 7
-    assert {(ladder.preset, ladder.budgets_s) for ladder in plan.ladders
-            if ladder.variant == "full"} == {("fast", (20.0, 60.0))}
+    assert {
+        (ladder.preset, ladder.budgets_s) for ladder in plan.ladders if ladder.variant == "full"
+    } == {("fast", (20.0, 60.0))}
     assert any("does not fit the paper preset" in note for note in plan.notes)
     assert any("does not fit the balanced preset" in note for note in plan.notes)
     assert all(ladder.budgets_s == (20.0,) for ladder in plan.ladders if ladder.variant != "full")
@@ -28,27 +40,71 @@ def test_quick_plan_with_table4():
     assert all((ladder.variant, ladder.budgets_s) == ("full", (20.0,)) for ladder in table4)
 
 
-def test_full_plan_runs_every_preset_and_variant():
+def test_full_plan_ladders_and_totals():
+    plan = make_plan(False, PRESETS, VARIANTS)
+    assert plan.table_budget_s == 180.0 and plan.views == (16, 8)
+    by_run = {
+        (ladder.session, ladder.preset, ladder.variant): ladder.budgets_s for ladder in plan.ladders
+    }
+    ladder = (60.0, 180.0, 600.0)
+    # Every preset's full variant climbs 1, 3 and 10 minutes.
+    for preset in PRESETS:
+        assert by_run.pop(("room", preset, "full")) == ladder
+    # The fast preset's 9 other supported variants run once at the 3-minute table budget.
+    others = {key: budgets for key, budgets in by_run.items() if key[0] == "room"}
+    assert set(others) == {
+        ("room", "fast", v) for v in VARIANTS if v not in ("full", "multi-exposure")
+    }
+    assert set(others.values()) == {(180.0,)}
+    # Table 4: five sessions, the fast preset's full variant at the table budget.
+    table4 = {key: budgets for key, budgets in by_run.items() if key[0] != "room"}
+    assert {key[0] for key in table4} == set(TABLE4_ROWS.values())
+    assert {key[1:] for key in table4} == {("fast", "full")}
+    assert set(table4.values()) == {(180.0,)}
+    assert len(plan.sessions) == 6
+    # 3 x 10 min + 9 x 3 min + 5 x 3 min = 72 min in 3 x 3 + 9 + 5 = 23 rungs.
+    assert planned_training_s(plan) == 72 * 60.0
+    assert planned_rungs(plan) == 23
+    assert "presets other than fast run only the full variant" in plan.notes
+    assert any(
+        note.startswith("the paper preset's full variant is fitted: one fit") for note in plan.notes
+    )
+
+
+def test_full_plan_without_table4():
     plan = make_plan(False, PRESETS, VARIANTS, table4=False)
     assert "Table 4 sessions not made" in plan.notes
-    assert plan.table_budget_s == 600.0 and plan.views == (16, 8)
-    assert len(plan.ladders) == 3 * 10
-    full = [ladder for ladder in plan.ladders if ladder.variant == "full"]
-    assert all(ladder.budgets_s == FULL_BUDGETS_S for ladder in full)
-    others = [ladder for ladder in plan.ladders if ladder.variant != "full"]
-    assert all(ladder.budgets_s == (60.0, 180.0, 600.0) for ladder in others)
     assert [s.key for s in plan.sessions] == ["room"]
+    assert planned_training_s(plan) == (72 - 15) * 60.0 and planned_rungs(plan) == 18
 
 
-def test_budgets_below_the_table_budget_keep_the_first():
-    plan = make_plan(False, ("fast",), ("full", "base"), budgets_s=(900.0, 1200.0),
-                     table_budget_s=600.0, table4=False)
-    assert [(ladder.variant, ladder.budgets_s) for ladder in plan.ladders] == [
-        ("full", (900.0, 1200.0)), ("base", (900.0,))]
+def test_quick_plan_totals():
+    plan = make_plan(True, PRESETS, VARIANTS)
+    # fast/full up 20 s and 60 s, six other variants at 20 s.
+    assert planned_training_s(plan) == 60.0 + 6 * 20.0
+    assert planned_rungs(plan) == 2 + 6
+
+
+def test_overridden_budgets_put_the_table_budget_on_the_table_presets_ladder():
+    plan = make_plan(
+        False,
+        ("fast", "paper"),
+        ("full", "base"),
+        budgets_s=(900.0, 1200.0),
+        table_budget_s=600.0,
+        table4=False,
+    )
+    assert [(ladder.preset, ladder.variant, ladder.budgets_s) for ladder in plan.ladders] == [
+        ("fast", "full", (600.0, 900.0, 1200.0)),
+        ("fast", "base", (600.0,)),
+        ("paper", "full", (900.0, 1200.0)),
+    ]
 
 
 def test_quick_plan_honours_the_preset_list():
     plan = make_plan(True, ("fast",), ("full", "base", "power-crf"))
     assert [(ladder.preset, ladder.variant) for ladder in plan.ladders] == [
-        ("fast", "full"), ("fast", "base")]
+        ("fast", "full"),
+        ("fast", "base"),
+    ]
     assert "quick mode leaves out power-crf (run without --quick)" in plan.notes

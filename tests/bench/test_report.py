@@ -12,19 +12,43 @@ MACHINE = Machine("Test CPU", 2, "Linux", "3.11", "2.0", "2.13", "cpu", 2, (1.0,
 
 def report_with(rows):
     plan = make_plan(True, ("fast", "paper"), ("full", "no-events", "base", "oracle"))
-    return BenchReport("python tools/bench.py --quick", MACHINE, "2026-01-01 00:00 UTC", plan,
-                       "truth", wall_s=600.0, rows=rows)
+    return BenchReport(
+        "python tools/bench.py --quick",
+        MACHINE,
+        "2026-01-01 00:00 UTC",
+        plan,
+        "truth",
+        wall_s=600.0,
+        rows=rows,
+    )
 
 
 def run(variant, hdr, budget=20.0, preset="fast", **kwargs):
-    return RunRow("room", preset, variant, budget, hdr_psnr=hdr, hdr_ssim=0.9, novel_psnr=hdr + 2,
-                  novel_ssim=0.9, steps=10, train_s=budget, rays_per_s=kwargs.pop("rays", 1e4),
-                  render_s_per_view=kwargs.pop("render", 0.5), **kwargs)
+    return RunRow(
+        "room",
+        preset,
+        variant,
+        budget,
+        hdr_psnr=hdr,
+        hdr_ssim=0.9,
+        novel_psnr=hdr + 2,
+        novel_ssim=0.9,
+        steps=10,
+        train_s=budget,
+        rays_per_s=kwargs.pop("rays", 1e4),
+        render_s_per_view=kwargs.pop("render", 0.5),
+        **kwargs,
+    )
 
 
 def test_target_checks_read_the_table_budget_runs():
-    rows = [run("full", 24.0), run("full", 31.0, budget=60.0), run("base", 20.5),
-            run("no-events", 23.5), run("oracle", 28.0)]
+    rows = [
+        run("full", 24.0),
+        run("full", 31.0, budget=60.0),
+        run("base", 20.5),
+        run("no-events", 23.5),
+        run("oracle", 28.0),
+    ]
     report = report_with(rows)
     report.speed = SpeedProbe({"fast": 1e4, "paper": 50.0, "fast_over_paper": 200.0})
     checks = {c[0]: c[1:] for c in target_checks(report)}
@@ -59,3 +83,11 @@ def test_json_keeps_nan_and_rows(tmp_path):
     write_json(report, tmp_path / "results.json")
     saved = json.loads((tmp_path / "results.json").read_text())
     assert math.isnan(saved["rows"][0]["hdr_psnr"]) and saved["rows"][0]["variant"] == "full"
+
+
+def test_report_counts_the_rungs_read_back():
+    text = render_markdown(report_with([run("full", 24.0, reused=True), run("base", 20.5)]))
+    assert "1 of 2 rungs were read back from an earlier invocation" in text
+    assert "All 1 rungs were trained by this invocation." in render_markdown(
+        report_with([run("full", 24.0)])
+    )
