@@ -45,10 +45,15 @@ class FrustumSpace:
     def rays(
         self, origins: torch.Tensor, directions: torch.Tensor
     ) -> tuple[torch.Tensor, torch.Tensor]:
-        """World rays ``(R, 3)`` as NDC rays, parameter 0 at the near plane, 1 at infinity."""
+        """World rays ``(R, 3)`` as NDC rays, parameter 0 at the near plane, 1 at infinity.
+
+        A ray that does not go forward in the reference camera never meets the scene: it is
+        given an origin far beyond infinity (z' = 1e6) and no direction: it misses every box.
+        """
         w2c = origins.new_tensor(self.w2c)
         o = origins @ w2c[:, :3].T + w2c[:, 3]
         d = directions @ w2c[:, :3].T
+        backward = (d[:, 2] <= _MIN_FORWARD)[:, None]
         d = torch.cat([d[:, :2], d[:, 2:].clamp(min=_MIN_FORWARD)], dim=1)
         o = o + ((self.near - o[:, 2]) / d[:, 2])[:, None] * d
         ox, oy, oz = o.unbind(-1)
@@ -64,7 +69,11 @@ class FrustumSpace:
             ],
             dim=-1,
         )
-        return ndc_origins, ndc_directions
+        beyond = ndc_origins.new_tensor([0.0, 0.0, 1e6])
+        return (
+            torch.where(backward, beyond, ndc_origins),
+            torch.where(backward, torch.zeros_like(ndc_directions), ndc_directions),
+        )
 
     def to_ndc(self, points: np.ndarray) -> np.ndarray:
         """World points ``(P, 3)`` in front of the near plane to NDC."""

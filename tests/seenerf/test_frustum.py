@@ -85,3 +85,12 @@ def test_the_box_holds_every_view_between_near_and_far():
         for depth in (2.0, 5.0, 10.0):
             points = space.to_ndc(pose[:3, 3] + depth * local @ pose[:3, :3].T)
             assert (points >= np.array(box.low)).all() and (points <= np.array(box.high)).all()
+
+
+def test_a_ray_going_backwards_misses_every_box():
+    from seenerf.rays import SceneBox, intersect_box
+
+    space = forward_facing_space(np.stack([_pose()]), INTRINSICS, BOUNDS, IMAGE)
+    origins, directions = space.rays(torch.tensor([[0.0, 0.0, -5.0]]), torch.tensor([[0, 0, -1.0]]))
+    entry, exit_ = intersect_box(origins, directions, SceneBox((-3.0,) * 3, (3.0,) * 3), 0.0, 1.0)
+    assert torch.isfinite(origins).all() and float(exit_ - entry) == 0.0
