@@ -4,24 +4,30 @@ One command regenerates every number of the report:
 
     python tools/bench.py [--quick] [--out bench-out] [--poses auto|estimated|truth]
                           [--presets fast ...] [--variants full ...] [--budgets 60 180 ...]
-                          [--table-budget S] [--table4 | --no-table4] [--no-capture]
+                          [--table-budget S] [--table4 | --no-table4] [--no-capture] [--fresh]
 
 1. Sessions: the ``room`` benchmark of ``make_benchmark.py`` and the Table 4 sessions (input
    exposure x1/16, x1, x16 of 0.016 s at a fixed gain; DVS noise x1, x2, x4), recorded once under
    ``OUT/sessions/`` with their poses and reused by later runs.
 2. Runs: each preset x variant, each in its own ``seecap fit`` process per budget (a ladder of
-   budgets resumes one run), scored on the held-out views against the emulator's truth.
+   budgets resumes one run), scored on the held-out views against the emulator's truth. The
+   full plan is 72 minutes of training, about 100 minutes in all on a 2-core machine
+   (``benchlib/plan.py``).
 3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here.
 4. Capture side: ``bench_decode.py``, ``bench_usb.py`` and ``bench_record.py``.
 
 Writes ``OUT/report.md`` (a section for BENCHMARKS.md), ``OUT/results.json`` and
 ``OUT/speed_vs_error.png``; the report is rewritten after every run, so an interrupted benchmark
-leaves a partial one.
+leaves a partial one. Rerunning the same command resumes: every rung whose metrics are kept
+under ``OUT/runs/`` (and whose checkpoint is still there) is read back, not trained, and the
+report counts them; ``--fresh`` trains every rung again (sessions are still reused: delete
+``OUT/sessions/`` to make them again).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from datetime import UTC, datetime
@@ -30,7 +36,7 @@ from pathlib import Path
 from benchlib.capture import CAPTURE_BENCHES, run_capture_bench
 from benchlib.fits import run_ladder, run_speed_probe
 from benchlib.machine import describe_machine, exact_command
-from benchlib.plan import make_plan
+from benchlib.plan import make_plan, planned_rungs, planned_training_s
 from benchlib.plot import speed_error_figure, write_png
 from benchlib.poses_step import POSE_SOURCES, resolve_pose_source
 from benchlib.report import BenchReport, render_markdown, write_json
@@ -45,22 +51,47 @@ TOOLS_DIR = Path(__file__).resolve().parent
 
 def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true",
-                        help="about 15 minutes: 20 s and 60 s budgets, 4 + 2 views, the fast "
-                        "preset's Table 3 variants and the oracle")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="about 15 minutes: 20 s and 60 s budgets, 4 + 2 views, the fast "
+        "preset's Table 3 variants and the oracle",
+    )
     parser.add_argument("--out", type=Path, default=Path("bench-out"), help="output folder")
-    parser.add_argument("--poses", choices=("auto", *POSE_SOURCES), default="auto",
-                        help="estimated (the real pipeline), the emulator's truth, or auto: "
-                        "estimated unless --quick (too few views) or no estimator is installed")
+    parser.add_argument(
+        "--poses",
+        choices=("auto", *POSE_SOURCES),
+        default="auto",
+        help="estimated (the real pipeline), the emulator's truth, or auto: "
+        "estimated unless --quick (too few views) or no estimator is installed",
+    )
     parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS))
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
-    parser.add_argument("--budgets", nargs="+", type=float, default=[],
-                        help="budget ladder in seconds (default: 20 60 quick, 60 180 600 1800)")
-    parser.add_argument("--table-budget", type=float, default=0.0,
-                        help="budget of the paper comparisons, s (default: 20 quick, 600)")
-    parser.add_argument("--table4", action=argparse.BooleanOptionalAction, default=None,
-                        help="make and fit the Table 4 sessions (default: not with --quick)")
+    parser.add_argument(
+        "--budgets",
+        nargs="+",
+        type=float,
+        default=[],
+        help="budget ladder in seconds (default: 20 60 quick, 60 180 600)",
+    )
+    parser.add_argument(
+        "--table-budget",
+        type=float,
+        default=0.0,
+        help="budget of the paper comparisons, s (default: 20 quick, 180)",
+    )
+    parser.add_argument(
+        "--table4",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="make and fit the Table 4 sessions (default: not with --quick)",
+    )
     parser.add_argument("--no-capture", action="store_true", help="skip capture throughput")
+    parser.add_argument(
+        "--fresh",
+        action="store_true",
+        help="train every rung again instead of reading back earlier ones",
+    )
     return parser.parse_args(argv)
 
 
@@ -90,34 +121,60 @@ def prepare_sessions(report: BenchReport, out: Path) -> dict[str, Path]:
     return {s.spec.key: s.folder for s in report.sessions if not s.error}
 
 
-def run_fits(report: BenchReport, ready: dict[str, Path], out: Path, started: float) -> None:
+def run_fits(
+    report: BenchReport, ready: dict[str, Path], out: Path, started: float, fresh: bool
+) -> None:
     """Every ladder of the plan; the report is rewritten after each."""
     for ladder in report.plan.ladders:
         if ladder.session not in ready:
-            report.rows.append(RunRow(ladder.session, ladder.preset, ladder.variant,
-                                      ladder.budgets_s[0], status="session not ready"))
+            report.rows.append(
+                RunRow(
+                    ladder.session,
+                    ladder.preset,
+                    ladder.variant,
+                    ladder.budgets_s[0],
+                    status="session not ready",
+                )
+            )
             continue
-        report.rows += run_ladder(ladder, ready[ladder.session], out)
+        report.rows += run_ladder(ladder, ready[ladder.session], out, fresh=fresh)
         report.wall_s = time.monotonic() - started
         write_outputs(report, out)
+
+
+def _exit_on_sigterm(signum: int, frame) -> None:
+    raise SystemExit(128 + signum)
 
 
 def main(argv: list[str] | None = None, command: str | None = None) -> int:
     """Run the benchmark; return 0 when every session and run succeeded, else 1."""
     args = parse_arguments(argv)
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)  # so a running child is killed with us
     started = time.monotonic()
-    plan = make_plan(args.quick, tuple(args.presets), tuple(args.variants), tuple(args.budgets),
-                     args.table_budget, table4=args.table4)
+    plan = make_plan(
+        args.quick,
+        tuple(args.presets),
+        tuple(args.variants),
+        tuple(args.budgets),
+        args.table_budget,
+        table4=args.table4,
+    )
     out = args.out.resolve()  # children run in other folders
     out.mkdir(parents=True, exist_ok=True)
     typed = sys.argv if argv is None else ["tools/bench.py", *argv]
-    report = BenchReport(command or exact_command(typed), describe_machine(),
-                         datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"), plan,
-                         resolve_pose_source(args.poses, args.quick))
+    report = BenchReport(
+        command or exact_command(typed),
+        describe_machine(),
+        datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        plan,
+        resolve_pose_source(args.poses, args.quick),
+    )
     print(f"command: {report.command}\nmachine: {report.machine.line()}")
-    print(f"plan: {len(plan.sessions)} sessions, {len(plan.ladders)} runs, "
-          f"{sum(len(ladder.budgets_s) for ladder in plan.ladders)} scored rungs, at least "
-          f"{sum(ladder.budgets_s[-1] for ladder in plan.ladders) / 60:.0f} min of training")
+    print(
+        f"plan: {len(plan.sessions)} sessions, {len(plan.ladders)} runs, "
+        f"{planned_rungs(plan)} scored rungs, {planned_training_s(plan) / 60:.0f} min of "
+        "training before start-up, renders and rungs read back"
+    )
     if not args.no_capture:
         measure_capture(report, out)
     ready = prepare_sessions(report, out)
@@ -125,7 +182,7 @@ def main(argv: list[str] | None = None, command: str | None = None) -> int:
     if main_session in ready:
         report.speed = run_speed_probe(ready[main_session], out / "logs")
         print(f"preset speed: {report.speed.error or report.speed.rays_per_s}")
-    run_fits(report, ready, out, started)
+    run_fits(report, ready, out, started, args.fresh)
     report.wall_s = time.monotonic() - started
     write_outputs(report, out)
     print(f"report: {out / 'report.md'} ({report.wall_s / 60:.1f} min)")

@@ -21,9 +21,9 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import torch
 
+from davis_io.poses.truth import store_true_poses
 from seenerf.config import FitConfig
 from seenerf.fit import ensure_poses, fit_data
 from seenerf.session_data import load_training_data
@@ -84,33 +84,6 @@ def speed_table(data, steps: int, rounds: int = 3) -> dict:
     table = {name: rays / max(seconds, 1e-9) for name, (rays, seconds) in totals.items()}
     table["fast_over_paper"] = table["fast"] / table["paper"]
     return table
-
-
-def store_true_poses(session_dir: Path, b: int) -> None:
-    """Write the truth's poses at the latent time points as the session's poses for ``b``."""
-    from davis_io.emulator.truth import load_truth
-    from davis_io.poses.align import interpolate_poses
-    from davis_io.session import Session, SessionPoses
-
-    with Session.open(session_dir) as session:
-        truth = load_truth(session.truth_dir)
-        split = session.bins(b).split_us
-        times = truth.train_time_us.reshape(-1)
-        order = np.argsort(times, kind="stable")
-        keep = np.concatenate([[True], np.diff(times[order]) > 0])
-        known = truth.train_c2w.reshape(-1, 4, 4)[order][keep]
-        latent = interpolate_poses(times[order][keep], known, split.reshape(-1))
-        near, far = truth.depth_range_m
-        session.write_poses(
-            b,
-            SessionPoses(
-                latent.reshape(*split.shape, 4, 4),
-                np.ones(split.shape, bool),
-                truth.intrinsics,
-                np.zeros(0),
-                np.array([0.9 * near, 1.1 * far]),
-            ),
-        )
 
 
 def record(scene: str, out: Path, frames: int, exposure: str) -> float:

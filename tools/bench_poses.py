@@ -6,6 +6,7 @@ Records an emulated ``room`` session (346 x 260, 150 ms exposure, noisy DVS, RGG
 truth, estimates the poses of all ``views x (bins + 1)`` latent frames, and prints the time of
 every stage, the registration rate and the pose errors after the similarity alignment to the
 truth. The target: 16 views x 5 latent frames in at most 2 minutes. ``--quick`` uses 6 views.
+Other tools call :func:`run`, which returns the printed numbers as a dict.
 """
 
 from __future__ import annotations
@@ -30,31 +31,41 @@ from davis_io.session.recorder import record
 TARGET_S = 120.0
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="6 views instead of 16")
-    parser.add_argument("--views", type=int, default=16)
-    parser.add_argument("--bins", type=int, default=4)
-    parser.add_argument("--out", type=Path, help="keep the session here (default: temporary)")
-    parser.add_argument(
-        "--unknown-intrinsics", action="store_true", help="let COLMAP estimate the focal length"
-    )
-    args = parser.parse_args()
-    views = 6 if args.quick else args.views
-    print(f"machine: {platform.platform()}, {os.cpu_count()} CPUs, {platform.processor() or '?'}")
-    print("command:", shlex.join([Path(sys.executable).name, *sys.argv]))
+def run(
+    quick: bool,
+    *,
+    views: int = 16,
+    bins: int = 4,
+    out: Path | None = None,
+    unknown_intrinsics: bool = False,
+) -> dict:
+    """Record a session, estimate its poses, score them; return the numbers ``main`` prints.
+
+    Args:
+        quick: 6 views instead of ``views``.
+        views: training views of the session.
+        bins: event bins per exposure b.
+        out: keep the session under this folder (default: a temporary one).
+        unknown_intrinsics: let COLMAP estimate the focal length.
+
+    Returns:
+        ``machine``, ``views``, ``bins``, ``recording_s`` (the emulator, not part of the
+        target), ``stages`` (stage name -> seconds), ``summary`` (the estimator's report),
+        ``total_s``, ``target_s``, ``median_rotation_deg`` and ``median_translation_fraction``
+        (centre error over the scene extent).
+    """
+    views = 6 if quick else views
     with tempfile.TemporaryDirectory() as temporary:
-        folder = (args.out or Path(temporary)) / f"room{views}"
+        folder = (out or Path(temporary)) / f"room{views}"
         started = time.perf_counter()
         camera = EmulatedCamera(frames=views, test_views=2)
-        record(camera, folder, bins=args.bins, overwrite=True)
+        record(camera, folder, bins=bins, overwrite=True)
         save_truth(camera.truth, folder / "truth")
         recording_s = time.perf_counter() - started
-        print(f"recording (emulator, not part of the target): {recording_s:.1f} s")
         config = camera.config
         intrinsics = (
             None
-            if args.unknown_intrinsics
+            if unknown_intrinsics
             else np.array(
                 [config.focal_px, config.focal_px, (config.width - 1) / 2, (config.height - 1) / 2]
             )
@@ -71,26 +82,61 @@ def main() -> int:
 
         started = time.perf_counter()
         report = estimate_poses(
-            folder, b=args.bins, intrinsics=intrinsics, force=True, progress=progress
+            folder, b=bins, intrinsics=intrinsics, force=True, progress=progress
         )
         total = time.perf_counter() - started
         progress("done", 0, 0)
         with Session.open(folder) as session:
             errors = compare_with_truth(
-                session.poses(args.bins),
-                session.bins(args.bins).split_us,
+                session.poses(bins),
+                session.bins(bins).split_us,
                 load_truth(session.truth_dir),
             )
-    for stage, seconds in stages.items():
+    return {
+        "machine": f"{platform.platform()}, {os.cpu_count()} CPUs, {platform.processor() or '?'}",
+        "views": views,
+        "bins": bins,
+        "recording_s": recording_s,
+        "stages": stages,
+        "summary": report.summary(),
+        "total_s": total,
+        "target_s": TARGET_S,
+        "median_rotation_deg": errors.median_rotation_deg,
+        "median_translation_fraction": errors.median_translation_fraction,
+    }
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="6 views instead of 16")
+    parser.add_argument("--views", type=int, default=16)
+    parser.add_argument("--bins", type=int, default=4)
+    parser.add_argument("--out", type=Path, help="keep the session here (default: temporary)")
+    parser.add_argument(
+        "--unknown-intrinsics", action="store_true", help="let COLMAP estimate the focal length"
+    )
+    args = parser.parse_args()
+    print("command:", shlex.join([Path(sys.executable).name, *sys.argv]))
+    result = run(
+        args.quick,
+        views=args.views,
+        bins=args.bins,
+        out=args.out,
+        unknown_intrinsics=args.unknown_intrinsics,
+    )
+    print(f"machine: {result['machine']}")
+    print(f"recording (emulator, not part of the target): {result['recording_s']:.1f} s")
+    for stage, seconds in result["stages"].items():
         print(f"  {stage:32s} {seconds:6.1f} s")
-    print(report.summary())
+    print(result["summary"])
+    total, views, bins = result["total_s"], result["views"], result["bins"]
     print(
-        f"pose estimation: {total:.1f} s for {views} views x {args.bins + 1} latent frames "
+        f"pose estimation: {total:.1f} s for {views} views x {bins + 1} latent frames "
         f"(target {TARGET_S:.0f} s for 16 x 5: {'met' if total <= TARGET_S else 'MISSED'})"
     )
     print(
-        f"median rotation error {errors.median_rotation_deg:.3f} deg, median translation error "
-        f"{100 * errors.median_translation_fraction:.2f} % of the scene extent"
+        f"median rotation error {result['median_rotation_deg']:.3f} deg, median translation "
+        f"error {100 * result['median_translation_fraction']:.2f} % of the scene extent"
     )
     return 0
 

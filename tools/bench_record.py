@@ -8,6 +8,8 @@
 
     python tools/bench_record.py [--quick] [--rate MEV] [--seconds S] [--exposure-ms E]
                                  [--packet-ms P] [--skip-binning]
+
+Other tools call :func:`run`, which returns the printed numbers as a dict.
 """
 
 from __future__ import annotations
@@ -60,11 +62,24 @@ def bench_binning(repeats: int) -> dict[int, float]:
 class PacedSource:
     """Replays pre-generated 1 ms event packets in real time, with frames every interval."""
 
-    def __init__(self, rate_ev_s: float, seconds: float, exposure_us: int, interval_us: int,
-                 packet_us: int, *, paced: bool = True):
+    def __init__(
+        self,
+        rate_ev_s: float,
+        seconds: float,
+        exposure_us: int,
+        interval_us: int,
+        packet_us: int,
+        *,
+        paced: bool = True,
+    ):
         self.paced = paced
-        self.info = SourceInfo(camera="DAVIS346", serial="BENCH", width=WIDTH, height=HEIGHT,
-                               origin="usb" if paced else "emulator:bench")
+        self.info = SourceInfo(
+            camera="DAVIS346",
+            serial="BENCH",
+            width=WIDTH,
+            height=HEIGHT,
+            origin="usb" if paced else "emulator:bench",
+        )
         rng = np.random.default_rng(1)
         self.packet_us = packet_us
         per_packet = int(rate_ev_s * packet_us / 1e6)
@@ -82,8 +97,13 @@ class PacedSource:
 
     def _frame(self, index: int) -> Frame:
         start = index * self.interval_us + 10_000
-        return Frame(self.image, start, start + self.exposure_us, start - 5_000,
-                     start + self.exposure_us + 10_000)
+        return Frame(
+            self.image,
+            start,
+            start + self.exposure_us,
+            start - 5_000,
+            start + self.exposure_us + 10_000,
+        )
 
     def __iter__(self):
         begin = time.perf_counter()
@@ -105,15 +125,26 @@ class PacedSource:
             yield Packet(events=events, frames=frames)
 
 
-def bench_recording(rate: float, seconds: float, exposure_us: int, packet_us: int,
-                    folder: Path, *, paced: bool = True) -> dict:
-    source = PacedSource(rate, seconds, exposure_us, exposure_us + 50_000, packet_us,
-                         paced=paced)
+def bench_recording(
+    rate: float,
+    seconds: float,
+    exposure_us: int,
+    packet_us: int,
+    folder: Path,
+    *,
+    paced: bool = True,
+) -> dict:
+    source = PacedSource(rate, seconds, exposure_us, exposure_us + 50_000, packet_us, paced=paced)
     fills = []
     cpu_before = resource.getrusage(resource.RUSAGE_SELF)
     start = time.perf_counter()
-    result = record(source, folder / "session", bins=4, overwrite=True,
-                    status_callback=lambda status: fills.append(status.queue_fill))
+    result = record(
+        source,
+        folder / "session",
+        bins=4,
+        overwrite=True,
+        status_callback=lambda status: fills.append(status.queue_fill),
+    )
     wall = time.perf_counter() - start
     cpu_after = resource.getrusage(resource.RUSAGE_SELF)
     cpu = (cpu_after.ru_utime - cpu_before.ru_utime) + (cpu_after.ru_stime - cpu_before.ru_stime)
@@ -133,44 +164,113 @@ def bench_recording(rate: float, seconds: float, exposure_us: int, packet_us: in
     }
 
 
+def run(
+    quick: bool,
+    *,
+    rate_mev_s: float = 12.0,
+    seconds: float | None = None,
+    exposure_ms: float = 150.0,
+    packet_ms: float = 2.0,
+    skip_binning: bool = False,
+) -> dict:
+    """Measure binning and recording; return the numbers ``main`` prints.
+
+    Args:
+        quick: 3 s of recording, binning best of 3 (else 20 s, best of 7).
+        rate_mev_s: stream rate, M events/s.
+        seconds: recording length, overriding ``quick``.
+        exposure_ms: APS exposure, ms (a frame every exposure + 50 ms).
+        packet_ms: device time per packet, ms.
+        skip_binning: only the recording part (``binning_s`` is then empty).
+
+    Returns:
+        ``machine``, ``load_average_before``, ``settings`` (the arguments above, resolved),
+        ``binning_s`` (``{"b4": s, "b6": s}``, best times for 1 M events), ``capacity`` and
+        ``recording`` (each :func:`bench_recording`'s dict: unpaced with a waiting queue, and
+        paced in real time as a live camera) and ``targets_met`` (binning under 0.5 s, no
+        drops).
+    """
+    seconds = seconds or (3.0 if quick else 20.0)
+    machine = (
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"{platform.system()} {platform.release()}, Python {platform.python_version()}, "
+        f"numpy {np.__version__}"
+    )
+    load_before = load_average()
+    best = {} if skip_binning else bench_binning(3 if quick else 7)
+    settings = (rate_mev_s * 1e6, seconds, int(exposure_ms * 1000), int(packet_ms * 1000))
+    with tempfile.TemporaryDirectory() as folder:
+        capacity = bench_recording(*settings, Path(folder), paced=False)
+    with tempfile.TemporaryDirectory() as folder:
+        stats = bench_recording(*settings, Path(folder))
+    ok = stats["dropped_events"] == 0 and max(best.values(), default=0.0) < 0.5
+    return {
+        "machine": machine,
+        "load_average_before": load_before,
+        "settings": {
+            "rate_mev_s": rate_mev_s,
+            "seconds": seconds,
+            "exposure_ms": exposure_ms,
+            "packet_ms": packet_ms,
+        },
+        "binning_s": {f"b{b}": value for b, value in best.items()},
+        "capacity": capacity,
+        "recording": stats,
+        "targets_met": bool(ok),
+    }
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="short run (3 s of recording)")
     parser.add_argument("--rate", type=float, default=12.0, help="M events/s (default 12)")
     parser.add_argument("--seconds", type=float, default=None, help="recording length")
     parser.add_argument("--exposure-ms", type=float, default=150.0, help="APS exposure")
-    parser.add_argument("--packet-ms", type=float, default=2.0,
-                        help="device time per packet (a 128 KiB USB transfer is ~2.5 ms at 12 M/s)")
+    parser.add_argument(
+        "--packet-ms",
+        type=float,
+        default=2.0,
+        help="device time per packet (a 128 KiB USB transfer is ~2.5 ms at 12 M/s)",
+    )
     parser.add_argument("--skip-binning", action="store_true", help="only the recording part")
     args = parser.parse_args()
-    seconds = args.seconds or (3.0 if args.quick else 20.0)
     print(f"command: {' '.join([sys.executable, *sys.argv])}")
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"{platform.system()} {platform.release()}, Python {platform.python_version()}, "
-          f"numpy {np.__version__}; load average before: {load_average()}")
-    best = {} if args.skip_binning else bench_binning(3 if args.quick else 7)
-    for b, value in best.items():
+    result = run(
+        args.quick,
+        rate_mev_s=args.rate,
+        seconds=args.seconds,
+        exposure_ms=args.exposure_ms,
+        packet_ms=args.packet_ms,
+        skip_binning=args.skip_binning,
+    )
+    seconds = result["settings"]["seconds"]
+    print(f"machine: {result['machine']}; load average before: {result['load_average_before']}")
+    for name, value in result["binning_s"].items():
         verdict = "ok" if value < 0.5 else "TOO SLOW"
-        print(f"binning + h() of 1 M events, 346x260, b={b}: {value:.3f} s (target < 0.5 s) "
-              f"{verdict}")
-    settings = (args.rate * 1e6, seconds, int(args.exposure_ms * 1000), int(args.packet_ms * 1000))
-    with tempfile.TemporaryDirectory() as folder:
-        capacity = bench_recording(*settings, Path(folder), paced=False)
-    print(f"capacity (unpaced, waiting queue): {capacity['events_per_s'] / 1e6:.2f} M events/s "
-          f"wall; {capacity['cpu_s'] / seconds:.2f} CPU-seconds per second of a "
-          f"{args.rate:g} M events/s stream")
-    with tempfile.TemporaryDirectory() as folder:
-        stats = bench_recording(*settings, Path(folder))
-    print(f"recording {args.rate:g} M events/s in {args.packet_ms:g} ms packets for "
-          f"{seconds:g} s, exposure "
-          f"{args.exposure_ms:g} ms: {stats['events']} events, {stats['frames']} frames, "
-          f"{stats['events_per_s'] / 1e6:.2f} M events/s over {stats['wall_s']:.1f} s wall, "
-          f"{stats['cpu_s']:.1f} s CPU, {stats['mb']:.0f} MB, max queue fill "
-          f"{stats['max_queue_fill']:.0%}, source late by up to {stats['source_late_ms']:.0f} ms")
-    ok = stats["dropped_events"] == 0
-    print(f"drops: {stats['dropped_events']} events in {stats['dropped_packets']} packets "
-          f"(target 0) {'ok' if ok else 'DROPS'}")
-    return 0 if ok and max(best.values(), default=0.0) < 0.5 else 1
+        print(
+            f"binning + h() of 1 M events, 346x260, b={name[1:]}: {value:.3f} s "
+            f"(target < 0.5 s) {verdict}"
+        )
+    capacity, stats = result["capacity"], result["recording"]
+    print(
+        f"capacity (unpaced, waiting queue): {capacity['events_per_s'] / 1e6:.2f} M events/s "
+        f"wall; {capacity['cpu_s'] / seconds:.2f} CPU-seconds per second of a "
+        f"{args.rate:g} M events/s stream"
+    )
+    print(
+        f"recording {args.rate:g} M events/s in {args.packet_ms:g} ms packets for "
+        f"{seconds:g} s, exposure "
+        f"{args.exposure_ms:g} ms: {stats['events']} events, {stats['frames']} frames, "
+        f"{stats['events_per_s'] / 1e6:.2f} M events/s over {stats['wall_s']:.1f} s wall, "
+        f"{stats['cpu_s']:.1f} s CPU, {stats['mb']:.0f} MB, max queue fill "
+        f"{stats['max_queue_fill']:.0%}, source late by up to {stats['source_late_ms']:.0f} ms"
+    )
+    drops_ok = stats["dropped_events"] == 0
+    print(
+        f"drops: {stats['dropped_events']} events in {stats['dropped_packets']} packets "
+        f"(target 0) {'ok' if drops_ok else 'DROPS'}"
+    )
+    return 0 if result["targets_met"] else 1
 
 
 if __name__ == "__main__":

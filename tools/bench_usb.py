@@ -9,6 +9,8 @@
    host queue overflow, which must be zero.
 
     python tools/bench_usb.py [--quick] [--seconds S] [--rate EVENTS_PER_S]
+
+Other tools call :func:`run`, which returns the printed numbers as a dict.
 """
 
 from __future__ import annotations
@@ -59,8 +61,12 @@ def bench_decoder(words: np.ndarray, n_events: int, repeats: int) -> dict:
         best = min(best, time.perf_counter() - start)
         if decoder.stats.events != n_events:
             raise SystemExit(f"decoder lost events: {decoder.stats.events} of {n_events}")
-    return {"words": len(words), "seconds": best, "mwords_s": len(words) / best / 1e6,
-            "mevents_s": n_events / best / 1e6}
+    return {
+        "words": len(words),
+        "seconds": best,
+        "mwords_s": len(words) / best / 1e6,
+        "mevents_s": n_events / best / 1e6,
+    }
 
 
 def bench_end_to_end(block: np.ndarray, block_events: int, seconds: float) -> dict:
@@ -80,10 +86,49 @@ def bench_end_to_end(block: np.ndarray, block_events: int, seconds: float) -> di
         wall = time.monotonic() - start
         stats = camera.reader.stats
     expected = block_events * repeats
-    return {"stream_s": repeats * block_us / 1e6, "events": received, "expected": expected,
-            "wall_s": wall, "mevents_s": received / (repeats * block_us / 1e6) / 1e6,
-            "lag_max_s": lag_max, "packets_lost": stats.packets_lost,
-            "events_lost": stats.events_lost}
+    return {
+        "stream_s": repeats * block_us / 1e6,
+        "events": received,
+        "expected": expected,
+        "wall_s": wall,
+        "mevents_s": received / (repeats * block_us / 1e6) / 1e6,
+        "lag_max_s": lag_max,
+        "packets_lost": stats.packets_lost,
+        "events_lost": stats.events_lost,
+    }
+
+
+def run(quick: bool, *, seconds: float | None = None, rate: float = 12e6) -> dict:
+    """Measure the word decoder and the driver end to end; return the numbers ``main`` prints.
+
+    Args:
+        quick: 2 s end to end, a 2-block stream decoded best of 2 (else 10 s, 8 blocks, best
+            of 5).
+        seconds: end-to-end duration, overriding ``quick``.
+        rate: events per second of the stream.
+
+    Returns:
+        ``machine``, ``rate_ev_s``, ``words_per_event``, ``decoder`` (``words``, ``seconds``,
+        ``mwords_s``, ``mevents_s``), ``end_to_end`` (``stream_s``, ``events``, ``expected``,
+        ``wall_s``, ``mevents_s``, ``lag_max_s``, ``packets_lost``, ``events_lost``) and
+        ``targets_met`` (at least 50 M words/s decoded, no event lost end to end).
+    """
+    seconds = seconds or (2.0 if quick else 10.0)
+    blocks = 2 if quick else 8
+    block, block_events = event_block(rate, wraps=4)
+    decode = bench_decoder(np.tile(block, blocks), block_events * blocks, repeats=2 if quick else 5)
+    e2e = bench_end_to_end(block, block_events, seconds)
+    ok = decode["mwords_s"] >= 50 and e2e["packets_lost"] == 0 and e2e["events"] == e2e["expected"]
+    return {
+        "machine": f"{platform.platform()}, {os.cpu_count()} cores, "
+        f"{platform.processor() or '?'}, python {platform.python_version()}, "
+        f"numpy {np.__version__}",
+        "rate_ev_s": rate,
+        "words_per_event": len(block) / block_events,
+        "decoder": decode,
+        "end_to_end": e2e,
+        "targets_met": bool(ok),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -92,26 +137,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=None, help="end-to-end duration")
     parser.add_argument("--rate", type=float, default=12e6, help="events per second")
     args = parser.parse_args(argv)
-    seconds = args.seconds or (2.0 if args.quick else 10.0)
     print(f"command: {' '.join([os.path.basename(sys.executable), *sys.argv])}")
-    print(f"machine: {platform.platform()}, {os.cpu_count()} cores, {platform.processor() or '?'}"
-          f", python {platform.python_version()}, numpy {np.__version__}")
-    block, block_events = event_block(args.rate, wraps=4)
-    words_per_event = len(block) / block_events
-    decode = bench_decoder(np.tile(block, 2 if args.quick else 8), block_events *
-                           (2 if args.quick else 8), repeats=2 if args.quick else 5)
-    print(f"decoder: {decode['words'] / 1e6:.1f} M words ({words_per_event:.2f} words/event) in "
-          f"{decode['seconds']:.3f} s: {decode['mwords_s']:.1f} M words/s, "
-          f"{decode['mevents_s']:.1f} M events/s (target >= 50 M words/s)")
-    e2e = bench_end_to_end(block, block_events, seconds)
-    print(f"end to end: {e2e['stream_s']:.2f} s of stream at {args.rate / 1e6:.0f} M events/s "
-          f"in {e2e['wall_s']:.2f} s wall; received {e2e['events']:,} of {e2e['expected']:,} "
-          f"events ({e2e['mevents_s']:.2f} M events/s of stream time); max lag "
-          f"{e2e['lag_max_s'] * 1000:.0f} ms; host queue overflow {e2e['packets_lost']} packets "
-          f"({e2e['events_lost']} events)")
-    ok = decode["mwords_s"] >= 50 and e2e["packets_lost"] == 0 and e2e["events"] == e2e["expected"]
-    print("result: " + ("targets met" if ok else "TARGET MISSED"))
-    return 0 if ok else 1
+    result = run(args.quick, seconds=args.seconds, rate=args.rate)
+    decode, e2e = result["decoder"], result["end_to_end"]
+    print(f"machine: {result['machine']}")
+    print(
+        f"decoder: {decode['words'] / 1e6:.1f} M words ({result['words_per_event']:.2f} "
+        f"words/event) in {decode['seconds']:.3f} s: {decode['mwords_s']:.1f} M words/s, "
+        f"{decode['mevents_s']:.1f} M events/s (target >= 50 M words/s)"
+    )
+    print(
+        f"end to end: {e2e['stream_s']:.2f} s of stream at {args.rate / 1e6:.0f} M events/s "
+        f"in {e2e['wall_s']:.2f} s wall; received {e2e['events']:,} of {e2e['expected']:,} "
+        f"events ({e2e['mevents_s']:.2f} M events/s of stream time); max lag "
+        f"{e2e['lag_max_s'] * 1000:.0f} ms; host queue overflow {e2e['packets_lost']} packets "
+        f"({e2e['events_lost']} events)"
+    )
+    print("result: " + ("targets met" if result["targets_met"] else "TARGET MISSED"))
+    return 0 if result["targets_met"] else 1
 
 
 if __name__ == "__main__":

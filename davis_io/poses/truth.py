@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from davis_io.poses.align import Similarity, align_poses, rotation_error_deg
-from davis_io.session import SessionPoses
+from davis_io.poses.align import Similarity, align_poses, interpolate_poses, rotation_error_deg
+from davis_io.session import Session, SessionPoses
 
-__all__ = ["PoseErrors", "compare_with_truth", "test_poses_from_truth"]
+__all__ = ["PoseErrors", "compare_with_truth", "store_true_poses", "test_poses_from_truth"]
 
 
 @dataclass(frozen=True)
@@ -79,3 +79,34 @@ def test_poses_from_truth(
     truth = load_truth(truth_dir)
     errors = compare_with_truth(poses, split_us, truth)
     return errors.alignment.inverse().apply_poses(truth.test_c2w)
+
+
+def store_true_poses(session_dir: Path, b: int) -> None:
+    """Store the truth's camera path as the session's poses for ``b`` bins per exposure.
+
+    The true training poses (every sub-frame time of every exposure) are interpolated at the
+    ``(F, b+1)`` latent time points and written with every pose marked registered, the truth's
+    intrinsics, no distortion, and depth bounds of the truth's depth range widened by 10 % each
+    way. Evaluation only: it lets a fit run on an emulated session without pose estimation.
+    """
+    from davis_io.emulator import load_truth
+
+    with Session.open(session_dir) as session:
+        truth = load_truth(session.truth_dir)
+        split = session.bins(b).split_us
+        times = truth.train_time_us.reshape(-1)
+        order = np.argsort(times, kind="stable")
+        keep = np.concatenate([[True], np.diff(times[order]) > 0])
+        known = truth.train_c2w.reshape(-1, 4, 4)[order][keep]
+        latent = interpolate_poses(times[order][keep], known, split.reshape(-1))
+        near, far = truth.depth_range_m
+        session.write_poses(
+            b,
+            SessionPoses(
+                latent.reshape(*split.shape, 4, 4),
+                np.ones(split.shape, bool),
+                truth.intrinsics,
+                np.zeros(0),
+                np.array([0.9 * near, 1.1 * far]),
+            ),
+        )

@@ -88,6 +88,7 @@ def test_json_keeps_nan_and_rows(tmp_path):
 def test_report_counts_the_rungs_read_back():
     text = render_markdown(report_with([run("full", 24.0, reused=True), run("base", 20.5)]))
     assert "1 of 2 rungs were read back from an earlier invocation" in text
+    assert "from that invocation), 1 trained by this one." in text
     assert "All 1 rungs were trained by this invocation." in render_markdown(
         report_with([run("full", 24.0)])
     )

@@ -1,78 +1,110 @@
-"""Capture-side throughput: the existing ``tools/bench_*.py`` run as child processes, parsed."""
+"""Capture-side throughput: each ``tools/bench_*.py`` tool's ``run`` in a child process."""
 
 from __future__ import annotations
 
-import re
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from benchlib.results import ProcessUsage
 from benchlib.runner import python_command, run_measured
+from benchlib.tool_result import RESULT_PREFIX
 
 __all__ = [
     "CAPTURE_BENCHES",
     "CaptureBench",
     "CaptureResult",
+    "Figure",
+    "figures_from",
     "meets",
-    "parse_output",
+    "read_result",
     "run_capture_bench",
 ]
 
-NUMBER = r"([-+]?\d[\d,]*(?:\.\d+)?)"
+
+@dataclass(frozen=True)
+class Figure:
+    """One number of a tool's result, as the report shows it.
+
+    Attributes:
+        label: name with unit.
+        key: where it is in the tool's result dict, nested keys joined by dots.
+        scale: factor from the result's unit to the label's.
+    """
+
+    label: str
+    key: str
+    scale: float = 1.0
 
 
 @dataclass(frozen=True)
 class CaptureBench:
-    """One capture-side benchmark tool and the figures read from its output.
+    """One capture-side benchmark tool and the figures read from its ``run`` result.
 
     Attributes:
-        tool: script under ``tools/``.
-        figures: figure name -> (label with unit, regular expression whose group 1 is the number).
+        tool: script under ``tools/`` with a ``run(quick) -> dict``.
+        figures: figure name -> :class:`Figure`.
         targets: figure name -> (comparison ``>=``, ``<`` or ``==``, value) the figure must meet.
     """
 
     tool: str
-    figures: dict[str, tuple[str, str]]
+    figures: dict[str, Figure]
     targets: dict[str, tuple[str, float]] = field(default_factory=dict)
 
 
 CAPTURE_BENCHES = (
-    CaptureBench("bench_decode.py", {
-        "events": ("events in the file", rf"file: {NUMBER} events"),
-        "ours_mev_s": ("ours, M events/s", rf"ours:\s+{NUMBER} M events/s"),
-        "dv_mev_s": ("dv-processing, M events/s", rf"dv-processing:\s+{NUMBER} M events/s"),
-        "ratio": ("ours / dv-processing", rf"ratio ours / dv-processing: {NUMBER}"),
-    }),
-    CaptureBench("bench_usb.py", {
-        "decoder_mwords_s": ("word decoder, M words/s", rf"s: {NUMBER} M words/s"),
-        "decoder_mev_s": ("word decoder, M events/s", rf"M words/s, {NUMBER} M events/s"),
-        "e2e_mev_s": ("end to end at 12 M events/s, M events/s received",
-                      rf"events \({NUMBER} M events/s of stream time"),
-        "e2e_lag_ms": ("end to end, largest lag, ms", rf"max lag {NUMBER} ms"),
-        "e2e_overflow": ("end to end, host queue overflow, packets",
-                         rf"host queue overflow {NUMBER} packets"),
-    }, {"decoder_mwords_s": (">=", 50.0), "e2e_overflow": ("==", 0.0)}),
-    CaptureBench("bench_record.py", {
-        "binning_b4_s": ("binning 1 M events, b=4, s", rf"b=4: {NUMBER} s"),
-        "binning_b6_s": ("binning 1 M events, b=6, s", rf"b=6: {NUMBER} s"),
-        "capacity_mev_s": ("recorder capacity (unpaced), M events/s", rf"capacity.*?: {NUMBER} M"),
-        "recorded_mev_s": ("recording paced at 12 M events/s, M events/s",
-                           rf"frames, {NUMBER} M events/s over"),
-        "drops": ("recording, dropped events", rf"drops: {NUMBER} events"),
-    }, {"binning_b4_s": ("<", 0.5), "binning_b6_s": ("<", 0.5), "drops": ("==", 0.0)}),
+    CaptureBench(
+        "bench_decode.py",
+        {
+            "events": Figure("events in the file", "events"),
+            "ours_mev_s": Figure("ours, M events/s", "ours_ev_s", 1e-6),
+            "dv_mev_s": Figure("dv-processing, M events/s", "dv_ev_s", 1e-6),
+            "ratio": Figure("ours / dv-processing", "ratio"),
+        },
+    ),
+    CaptureBench(
+        "bench_usb.py",
+        {
+            "decoder_mwords_s": Figure("word decoder, M words/s", "decoder.mwords_s"),
+            "decoder_mev_s": Figure("word decoder, M events/s", "decoder.mevents_s"),
+            "e2e_mev_s": Figure(
+                "end to end at 12 M events/s, M events/s received", "end_to_end.mevents_s"
+            ),
+            "e2e_lag_ms": Figure("end to end, largest lag, ms", "end_to_end.lag_max_s", 1e3),
+            "e2e_overflow": Figure(
+                "end to end, host queue overflow, packets", "end_to_end.packets_lost"
+            ),
+        },
+        {"decoder_mwords_s": (">=", 50.0), "e2e_overflow": ("==", 0.0)},
+    ),
+    CaptureBench(
+        "bench_record.py",
+        {
+            "binning_b4_s": Figure("binning 1 M events, b=4, s", "binning_s.b4"),
+            "binning_b6_s": Figure("binning 1 M events, b=6, s", "binning_s.b6"),
+            "capacity_mev_s": Figure(
+                "recorder capacity (unpaced), M events/s", "capacity.events_per_s", 1e-6
+            ),
+            "recorded_mev_s": Figure(
+                "recording paced at 12 M events/s, M events/s", "recording.events_per_s", 1e-6
+            ),
+            "drops": Figure("recording, dropped events", "recording.dropped_events"),
+        },
+        {"binning_b4_s": ("<", 0.5), "binning_b6_s": ("<", 0.5), "drops": ("==", 0.0)},
+    ),
 )
 """The capture-side benchmarks, in report order."""
 
 
 @dataclass
 class CaptureResult:
-    """One tool's run: its figures, the lines it printed, and what the process cost."""
+    """One tool's run: its figures, its whole result dict, and what the process cost."""
 
     bench: CaptureBench
     command: list[str]
     usage: ProcessUsage | None = None
     figures: dict[str, float] = field(default_factory=dict)
-    lines: list[str] = field(default_factory=list)
+    result: dict = field(default_factory=dict)
     error: str = ""
 
 
@@ -82,29 +114,45 @@ def meets(value: float, target: tuple[str, float]) -> bool:
     return {">=": value >= limit, "<": value < limit, "==": value == limit}[comparison]
 
 
-def parse_output(bench: CaptureBench, text: str) -> dict[str, float]:
-    """The figures found in a tool's output (missing ones are left out)."""
+def read_result(text: str) -> dict | None:
+    """The result dict of a :mod:`benchlib.tool_result` child's output (None if absent)."""
+    for line in reversed(text.splitlines()):
+        if line.startswith(RESULT_PREFIX):
+            return json.loads(line[len(RESULT_PREFIX) :])
+    return None
+
+
+def figures_from(bench: CaptureBench, result: dict) -> dict[str, float]:
+    """The figures found in a tool's result, scaled to their labels' units (missing left out)."""
     figures = {}
-    for name, (_, pattern) in bench.figures.items():
-        match = re.search(pattern, text)
-        if match:
-            figures[name] = float(match.group(1).replace(",", ""))
+    for name, figure in bench.figures.items():
+        value = result
+        for key in figure.key.split("."):
+            value = value.get(key) if isinstance(value, dict) else None
+        if isinstance(value, int | float):
+            figures[name] = float(value) * figure.scale
     return figures
 
 
-def run_capture_bench(bench: CaptureBench, tools_dir: Path, log_dir: Path, quick: bool,
-                      timeout_s: float = 1800.0) -> CaptureResult:
-    """Run one tool (``--quick`` when asked) in its own process and read its figures."""
-    command = python_command(str(tools_dir / bench.tool), *(["--quick"] if quick else []))
+def run_capture_bench(
+    bench: CaptureBench, tools_dir: Path, log_dir: Path, quick: bool, timeout_s: float = 1800.0
+) -> CaptureResult:
+    """Run one tool's ``run`` (quick when asked) in its own process and read its figures."""
+    command = python_command(
+        "-m", "benchlib.tool_result", Path(bench.tool).stem, *(["--quick"] if quick else [])
+    )
     result = CaptureResult(bench, command)
     log = log_dir / f"capture-{Path(bench.tool).stem}.log"
-    result.usage = run_measured(command, log, cwd=tools_dir.parent, timeout_s=timeout_s)
+    result.usage = run_measured(command, log, cwd=tools_dir, timeout_s=timeout_s)
     text = log.read_text(errors="replace")
-    result.lines = [line for line in text.splitlines() if line.strip()]
-    result.figures = parse_output(bench, text)
+    result.result = read_result(text) or {}
+    result.figures = figures_from(bench, result.result)
     missing = sorted(set(bench.figures) - set(result.figures))
     if missing:
-        tail = result.lines[-1] if result.lines else "no output"
-        result.error = (f"exit {result.usage.returncode}; figures not found: "
-                        f"{', '.join(missing)}; last line: {tail}")
+        lines = [line for line in text.splitlines() if line.strip()]
+        tail = lines[-1] if lines else "no output"
+        result.error = (
+            f"exit {result.usage.returncode}; figures not found: "
+            f"{', '.join(missing)}; last line: {tail[:200]}"
+        )
     return result

@@ -2,17 +2,30 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
-import shutil
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from benchlib.plan import Ladder
 from benchlib.results import ProcessUsage, RunRow, row_from_metrics
-from benchlib.runner import python_command, run_measured
+from benchlib.runner import python_command, run_measured, usage_from_json
 
-__all__ = ["SpeedProbe", "fit_command", "run_ladder", "run_name", "run_speed_probe"]
+__all__ = [
+    "KEPT_KEY",
+    "SpeedProbe",
+    "fit_command",
+    "kept_path",
+    "reusable_rungs",
+    "run_ladder",
+    "run_name",
+    "run_speed_probe",
+]
+
+KEPT_KEY = "bench"
+"""Key the benchmark adds to a rung's kept ``metrics.json``: the session folder it was trained
+on and the rung's process cost, so a later invocation can read the rung back."""
 
 FIT_OVERHEAD_S = 900.0
 """Time a rung may take beyond its budget (imports, data, warm start, renders) before a kill."""
@@ -42,9 +55,20 @@ def run_name(ladder: Ladder) -> str:
 
 def fit_command(session_dir: Path, ladder: Ladder, budget_s: float, fresh: bool) -> list[str]:
     """``seecap fit`` arguments of one rung (a fresh run for the first, a resume after)."""
-    command = python_command("-m", "davis_io.cli", "fit", str(session_dir), "--preset",
-                             ladder.preset, "--variant", ladder.variant, "--time-budget",
-                             f"{budget_s:g}s", "--run", run_name(ladder))
+    command = python_command(
+        "-m",
+        "davis_io.cli",
+        "fit",
+        str(session_dir),
+        "--preset",
+        ladder.preset,
+        "--variant",
+        ladder.variant,
+        "--time-budget",
+        f"{budget_s:g}s",
+        "--run",
+        run_name(ladder),
+    )
     return command + (["--fresh"] if fresh else [])
 
 
@@ -58,8 +82,9 @@ def _failure(log: Path, returncode: int, timed_out: bool) -> str:
 def run_speed_probe(session_dir: Path, log_dir: Path, steps: int = 10) -> SpeedProbe:
     """Run :mod:`benchlib.speed_probe` on a session in its own process and read its JSON line."""
     log = log_dir / "speed-probe.log"
-    command = python_command("-m", "benchlib.speed_probe", "--session", str(session_dir),
-                             "--steps", str(steps))
+    command = python_command(
+        "-m", "benchlib.speed_probe", "--session", str(session_dir), "--steps", str(steps)
+    )
     probe = SpeedProbe(usage=run_measured(command, log, cwd=TOOLS_DIR, timeout_s=FIT_OVERHEAD_S))
     for line in reversed(log.read_text(errors="replace").splitlines()):
         if line.startswith('{"rays_per_s"'):
@@ -69,41 +94,125 @@ def run_speed_probe(session_dir: Path, log_dir: Path, steps: int = 10) -> SpeedP
     return probe
 
 
-def run_ladder(ladder: Ladder, session_dir: Path, out_dir: Path,
-               progress: Callable[[str], None] = print) -> list[RunRow]:
+def kept_path(out_dir: Path, ladder: Ladder, budget_s: float) -> Path:
+    """Where a rung's metrics are kept: ``OUT/runs/SESSION/RUN/BUDGETs.json``."""
+    return out_dir / "runs" / ladder.session / run_name(ladder) / f"{budget_s:g}s.json"
+
+
+def _read_kept(path: Path, session_dir: Path) -> dict | None:
+    """The kept metrics at ``path`` if they were trained on ``session_dir`` (else None)."""
+    try:
+        metrics = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    made = metrics.get(KEPT_KEY, {})
+    return metrics if made.get("session_dir") == str(session_dir) and "process" in made else None
+
+
+def reusable_rungs(ladder: Ladder, session_dir: Path, out_dir: Path) -> list[dict]:
+    """Kept metrics of the ladder's leading rungs that an earlier invocation already trained.
+
+    A rung is read back when its kept metrics exist, were made on this session folder, and the
+    run folder still holds the checkpoint the next rung resumes. Only a leading run of such
+    rungs counts: once one rung is trained again, every later one must be too. None counts
+    when a rung above the first one to train was kept (by a ladder of other budgets): the
+    checkpoint may then be past that rung's budget, so the ladder starts over.
+    """
+    if not (session_dir / "fit" / run_name(ladder) / "checkpoint.pt").exists():
+        return []
+    kept = []
+    for budget in ladder.budgets_s:
+        metrics = _read_kept(kept_path(out_dir, ladder, budget), session_dir)
+        if metrics is None:
+            break
+        kept.append(metrics)
+    if len(kept) < len(ladder.budgets_s):
+        next_budget = ladder.budgets_s[len(kept)]
+        folder = kept_path(out_dir, ladder, next_budget).parent
+        if any(_kept_budget(path) > next_budget for path in folder.glob("*s.json")):
+            return []
+    return kept
+
+
+def _kept_budget(path: Path) -> float:
+    """The budget a kept file's name gives (``180s.json`` -> 180.0; NaN if none)."""
+    try:
+        return float(path.name.removesuffix("s.json"))
+    except ValueError:
+        return float("nan")
+
+
+def _keep(path: Path, metrics: dict, session_dir: Path, usage: ProcessUsage) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    made = {"session_dir": str(session_dir), "process": dataclasses.asdict(usage)}
+    path.write_text(json.dumps({**metrics, KEPT_KEY: made}, indent=1) + "\n")
+
+
+def _progress_line(tag: str, row: RunRow) -> str:
+    usage = row.process
+    how = "read back" if row.reused else f"{usage.wall_s:.0f} s wall, {usage.peak_rss_mb:.0f} MB"
+    return (
+        f"{tag}: HDR {row.hdr_psnr:.2f} dB, novel {row.novel_psnr:.2f} dB, "
+        f"{row.steps} steps in {row.train_s:.0f} s ({row.stopped}), {how}"
+    )
+
+
+def run_ladder(
+    ladder: Ladder,
+    session_dir: Path,
+    out_dir: Path,
+    *,
+    fresh: bool = False,
+    progress: Callable[[str], None] = print,
+) -> list[RunRow]:
     """Train ``ladder`` up each budget in turn; one scored row per rung.
 
     Each rung resumes the previous rung's checkpoint, so the 10-minute row costs 10 minutes of
     training in total, not 1 + 3 + 10. A rung that fails, or whose run already stopped before
-    its budget (step count or plateau), ends the ladder.
+    its budget (step count or plateau), ends the ladder. Rungs an earlier invocation finished
+    (:func:`reusable_rungs`) are read back, not trained, unless ``fresh``; before a rung is
+    trained, the kept metrics of its budget and every larger one are removed, since its
+    training changes the checkpoint they came from.
 
     Args:
         ladder: session, preset, variant and budgets.
         session_dir: the prepared session folder.
         out_dir: the benchmark's output folder (logs and per-rung metrics go under it).
+        fresh: train every rung, the first from scratch, ignoring earlier invocations.
         progress: receives one line per rung.
     """
     rows = []
     name = run_name(ladder)
+    kept = [] if fresh else reusable_rungs(ladder, session_dir, out_dir)
     for index, budget in enumerate(ladder.budgets_s):
         tag = f"{ladder.session}/{name}/{budget:g}s"
-        log = out_dir / "logs" / ladder.session / name / f"{budget:g}s.log"
-        usage = run_measured(fit_command(session_dir, ladder, budget, fresh=index == 0), log,
-                             timeout_s=budget + FIT_OVERHEAD_S)
-        row = RunRow(ladder.session, ladder.preset, ladder.variant, budget, process=usage)
-        metrics_path = session_dir / "fit" / name / "metrics.json"
-        if usage.returncode != 0 or not metrics_path.exists():
-            row.status = _failure(log, usage.returncode, usage.timed_out)
-            rows.append(row)
-            progress(f"{tag}: {row.status}")
-            break
-        kept = out_dir / "runs" / ladder.session / name / f"{budget:g}s.json"
-        kept.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(metrics_path, kept)
-        rows.append(row_from_metrics(row, json.loads(metrics_path.read_text())))
-        progress(f"{tag}: HDR {row.hdr_psnr:.2f} dB, novel {row.novel_psnr:.2f} dB, "
-                 f"{row.steps} steps in {row.train_s:.0f} s ({row.stopped}), "
-                 f"{usage.wall_s:.0f} s wall, {usage.peak_rss_mb:.0f} MB")
+        row = RunRow(ladder.session, ladder.preset, ladder.variant, budget)
+        if index < len(kept):
+            metrics = kept[index]
+            row.process = usage_from_json(metrics[KEPT_KEY]["process"])
+            row.reused = True
+        else:
+            if index == len(kept):
+                folder = kept_path(out_dir, ladder, budget).parent
+                for path in folder.glob("*s.json"):
+                    if not _kept_budget(path) < budget:  # this rung's, later ones, unreadable
+                        path.unlink()
+            log = out_dir / "logs" / ladder.session / name / f"{budget:g}s.log"
+            row.process = run_measured(
+                fit_command(session_dir, ladder, budget, fresh=index == 0),
+                log,
+                timeout_s=budget + FIT_OVERHEAD_S,
+            )
+            metrics_path = session_dir / "fit" / name / "metrics.json"
+            if row.process.returncode != 0 or not metrics_path.exists():
+                row.status = _failure(log, row.process.returncode, row.process.timed_out)
+                rows.append(row)
+                progress(f"{tag}: {row.status}")
+                break
+            metrics = json.loads(metrics_path.read_text())
+            _keep(kept_path(out_dir, ladder, budget), metrics, session_dir, row.process)
+        rows.append(row_from_metrics(row, metrics))
+        progress(_progress_line(tag, row))
         if row.stopped != "budget":
             break
     return rows

@@ -6,18 +6,33 @@ On Linux a child's peak resident memory starts at its parent's peak when it exec
 benchmark that has imported torch would inflate every child it measures. This launcher is a
 fresh interpreter with nothing loaded; it starts the command, reaps it with ``os.wait4`` (whose
 usage is that child's alone) and writes ``{"returncode", "wall_s", "cpu_s", "peak_rss_mb"}``.
-Standard library only, so it loads nothing else.
+On Linux the launcher and the command are killed when their parent dies, so a benchmark killed
+mid-run leaves no fit behind still writing its run folder. Standard library only, so it loads
+nothing else.
 """
 
 from __future__ import annotations
 
+import ctypes
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
 
-__all__ = ["main"]
+__all__ = ["die_with_parent", "main"]
+
+PR_SET_PDEATHSIG = 1
+"""Linux ``prctl`` option: the signal this process receives when its parent exits."""
+
+
+def die_with_parent() -> None:
+    """Have Linux kill the calling process when its parent exits (nothing elsewhere)."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):
+        pass
 
 
 def main(argv: list[str]) -> int:
@@ -25,8 +40,9 @@ def main(argv: list[str]) -> int:
     if len(argv) < 2:
         print("usage: measure.py USAGE.json COMMAND [ARGUMENT ...]", file=sys.stderr)
         return 2
+    die_with_parent()
     start = time.monotonic()
-    process = subprocess.Popen(argv[1:])
+    process = subprocess.Popen(argv[1:], preexec_fn=die_with_parent)
     _, status, usage = os.wait4(process.pid, 0)
     process.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen.wait
     record = {

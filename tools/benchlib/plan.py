@@ -1,4 +1,12 @@
-"""What one benchmark run measures: the sessions, and every preset x variant budget ladder."""
+"""What one benchmark run measures: the sessions, and every preset x variant budget ladder.
+
+The full plan is sized to about 100 minutes of wall time on a 2-core machine: 72 minutes of
+training (the table preset's ``full`` up 1, 3 and 10 minutes, its nine other variants at the
+3-minute table budget, ``balanced`` and ``paper`` ``full`` up the ladder, Table 4's five sessions
+at the table budget) in 23 rungs, each adding about a minute of start-up, rendering and scoring
+on an idle machine (more under load, and the paper preset renders for minutes), plus making
+the six sessions and the capture-side tools.
+"""
 
 from __future__ import annotations
 
@@ -12,16 +20,29 @@ __all__ = [
     "SessionSpec",
     "TABLE4_ROWS",
     "make_plan",
+    "planned_rungs",
+    "planned_training_s",
 ]
 
-FULL_BUDGETS_S = (60.0, 180.0, 600.0, 1800.0)
-"""Wall-clock budgets of the full benchmark: 1, 3, 10 and 30 minutes."""
+FULL_BUDGETS_S = (60.0, 180.0, 600.0)
+"""Wall-clock budgets of the full benchmark: 1, 3 and 10 minutes (30 would add over an hour per
+preset here; pass ``--budgets`` to climb further)."""
+
+FULL_TABLE_BUDGET_S = 180.0
+"""Budget at which the full benchmark reads the paper's comparisons: 3 minutes."""
 
 QUICK_BUDGETS_S = (20.0, 60.0)
 """Budgets of ``--quick``: enough to check the whole pipeline and the report, not to converge."""
 
-QUICK_VARIANTS = ("full", "no-events", "base", "naive-events", "point-crf-3d", "evdeblur-ecrf",
-                  "oracle")
+QUICK_VARIANTS = (
+    "full",
+    "no-events",
+    "base",
+    "naive-events",
+    "point-crf-3d",
+    "evdeblur-ecrf",
+    "oracle",
+)
 """Variants of ``--quick``: Table 3 and the oracle (the trainer's targets need full, base,
 no-events and oracle); Table 9's variants run in the full benchmark."""
 
@@ -30,12 +51,16 @@ UNSUPPORTED_VARIANTS = {
 }
 """Variants left out of the grid, with the reason printed in the report."""
 
+PAPER_PRESET_COST = (
+    "one fit of the published batch (1024 pixels x 5 poses x 192 samples through the 8x256 "
+    "MLP) held over 13 GB of memory here and renders for minutes"
+)
+"""What a fit of the ``paper`` preset costs on this kind of machine, printed in the report."""
+
 QUICK_UNFITTED_PRESETS = {
-    "paper": "one fit of the published batch (1024 pixels x 5 poses x 192 samples through the "
-             "8x256 MLP) held over 13 GB of memory here and renders for minutes; its speed is "
-             "in the rays-per-second table",
+    "paper": f"{PAPER_PRESET_COST}; its speed is in the rays-per-second table",
     "balanced": "left out to stay within 15 minutes (each fit costs about a minute beyond its "
-                "budget in start-up and renders); its speed is in the rays-per-second table",
+    "budget in start-up and renders); its speed is in the rays-per-second table",
 }
 """Presets ``--quick`` measures only for speed, with the reason printed in the report."""
 
@@ -104,16 +129,31 @@ class Plan:
 MAIN_SESSION = SessionSpec("room", maker="benchmark")
 
 TABLE4_SESSIONS = (
-    SessionSpec("t4-exposure-1_16", exposure_us=REFERENCE_EXPOSURE_US // 16,
-                gain_exposure_us=REFERENCE_EXPOSURE_US),
-    SessionSpec("t4-reference", exposure_us=REFERENCE_EXPOSURE_US,
-                gain_exposure_us=REFERENCE_EXPOSURE_US),
-    SessionSpec("t4-exposure-16", exposure_us=REFERENCE_EXPOSURE_US * 16,
-                gain_exposure_us=REFERENCE_EXPOSURE_US),
-    SessionSpec("t4-noise-2", exposure_us=REFERENCE_EXPOSURE_US,
-                gain_exposure_us=REFERENCE_EXPOSURE_US, noise_scale=2.0),
-    SessionSpec("t4-noise-4", exposure_us=REFERENCE_EXPOSURE_US,
-                gain_exposure_us=REFERENCE_EXPOSURE_US, noise_scale=4.0),
+    SessionSpec(
+        "t4-exposure-1_16",
+        exposure_us=REFERENCE_EXPOSURE_US // 16,
+        gain_exposure_us=REFERENCE_EXPOSURE_US,
+    ),
+    SessionSpec(
+        "t4-reference", exposure_us=REFERENCE_EXPOSURE_US, gain_exposure_us=REFERENCE_EXPOSURE_US
+    ),
+    SessionSpec(
+        "t4-exposure-16",
+        exposure_us=REFERENCE_EXPOSURE_US * 16,
+        gain_exposure_us=REFERENCE_EXPOSURE_US,
+    ),
+    SessionSpec(
+        "t4-noise-2",
+        exposure_us=REFERENCE_EXPOSURE_US,
+        gain_exposure_us=REFERENCE_EXPOSURE_US,
+        noise_scale=2.0,
+    ),
+    SessionSpec(
+        "t4-noise-4",
+        exposure_us=REFERENCE_EXPOSURE_US,
+        gain_exposure_us=REFERENCE_EXPOSURE_US,
+        noise_scale=4.0,
+    ),
 )
 
 TABLE4_ROWS = {
@@ -127,56 +167,106 @@ TABLE4_ROWS = {
 """Table 4 row key -> session fitted for it (the reference session serves both halves)."""
 
 
-def _grid(presets: tuple[str, ...], variants: tuple[str, ...], budgets: tuple[float, ...],
-          table_budget_s: float) -> list[Ladder]:
-    """The main session's ladders: ``full`` of every preset climbs every budget; other
-    variants stop at the table budget (the comparisons need nothing longer)."""
+def _grid(
+    presets: tuple[str, ...],
+    variants: tuple[str, ...],
+    budgets: tuple[float, ...],
+    table_budget_s: float,
+    table_preset: str,
+) -> list[Ladder]:
+    """The main session's ladders: ``full`` of every preset climbs every budget (the table
+    preset's also stops at the table budget, so the comparisons read every variant at the same
+    budget); the table preset's other variants run once, at the table budget; other presets
+    run only ``full``."""
     ladders = []
     for preset in presets:
         for variant in variants:
-            short = tuple(b for b in budgets if b <= table_budget_s) or budgets[:1]
-            ladders.append(Ladder(MAIN_SESSION.key, preset, variant,
-                                  budgets if variant == "full" else short))
+            if variant == "full":
+                rungs = (
+                    budgets if preset != table_preset else tuple(sorted({*budgets, table_budget_s}))
+                )
+                ladders.append(Ladder(MAIN_SESSION.key, preset, variant, rungs))
+            elif preset == table_preset:
+                ladders.append(Ladder(MAIN_SESSION.key, preset, variant, (table_budget_s,)))
     return ladders
 
 
-def make_plan(quick: bool, presets: tuple[str, ...], variants: tuple[str, ...],
-              budgets_s: tuple[float, ...] = (), table_budget_s: float = 0.0,
-              table_preset: str = "fast", table4: bool | None = None) -> Plan:
+def planned_training_s(plan: Plan) -> float:
+    """Seconds of training the plan asks for: each ladder's last budget (rungs resume)."""
+    return sum(ladder.budgets_s[-1] for ladder in plan.ladders)
+
+
+def planned_rungs(plan: Plan) -> int:
+    """Scored rungs of the plan: one ``seecap fit`` process, render and score each."""
+    return sum(len(ladder.budgets_s) for ladder in plan.ladders)
+
+
+def make_plan(
+    quick: bool,
+    presets: tuple[str, ...],
+    variants: tuple[str, ...],
+    budgets_s: tuple[float, ...] = (),
+    table_budget_s: float = 0.0,
+    table_preset: str = "fast",
+    table4: bool | None = None,
+) -> Plan:
     """The plan of one invocation.
 
     Args:
         quick: short budgets, 4 + 2 views per session, :data:`QUICK_VARIANTS` of the table
             preset, other presets only for ``full`` (none of :data:`QUICK_UNFITTED_PRESETS`).
+            Without it, 16 + 8 views; the table preset's ``full`` climbs the ladder and its
+            other variants (Tables 3 and 9) run at the table budget; every other preset runs
+            only ``full``, up the ladder; each Table 4 session runs ``full`` at the table
+            budget. With the defaults that is 72 minutes of training in 23 rungs.
         presets: every preset to run.
         variants: every variant to run (unsupported ones are left out with a note).
         budgets_s: the budget ladder, s (default: :data:`QUICK_BUDGETS_S` or
             :data:`FULL_BUDGETS_S`).
-        table_budget_s: budget of the comparisons (default: the first quick budget, or 10 min).
+        table_budget_s: budget of the comparisons (default: the first quick budget, or
+            :data:`FULL_TABLE_BUDGET_S`).
         table_preset: preset of the comparisons.
         table4: also make the Table 4 sessions and fit them (None: only without ``quick``).
     """
     budgets = tuple(sorted(budgets_s or (QUICK_BUDGETS_S if quick else FULL_BUDGETS_S)))
-    table_budget = table_budget_s or (budgets[0] if quick else min(600.0, budgets[-1]))
-    notes = [f"variant {name} left out: {why}" for name, why in UNSUPPORTED_VARIANTS.items()
-             if name in variants]
+    table_budget = table_budget_s or (budgets[0] if quick else FULL_TABLE_BUDGET_S)
+    notes = [
+        f"variant {name} left out: {why}"
+        for name, why in UNSUPPORTED_VARIANTS.items()
+        if name in variants
+    ]
     variants = tuple(v for v in variants if v not in UNSUPPORTED_VARIANTS)
     if quick:
         dropped = [v for v in variants if v not in QUICK_VARIANTS]
         variants = tuple(v for v in variants if v in QUICK_VARIANTS)
-        ladders = _grid(tuple(p for p in presets if p == table_preset), variants, budgets,
-                        table_budget)
-        others = [Ladder(MAIN_SESSION.key, p, "full", (budgets[0],))
-                  for p in presets if p not in (table_preset, *QUICK_UNFITTED_PRESETS)]
+        ladders = _grid(
+            tuple(p for p in presets if p == table_preset),
+            variants,
+            budgets,
+            table_budget,
+            table_preset,
+        )
+        others = [
+            Ladder(MAIN_SESSION.key, p, "full", (budgets[0],))
+            for p in presets
+            if p not in (table_preset, *QUICK_UNFITTED_PRESETS)
+        ]
         ladders += others
         if others:
             notes.append("quick mode: other presets run only the full variant at the first budget")
-        notes += [f"quick mode does not fit the {p} preset: {QUICK_UNFITTED_PRESETS[p]}"
-                  for p in presets if p in QUICK_UNFITTED_PRESETS]
+        notes += [
+            f"quick mode does not fit the {p} preset: {QUICK_UNFITTED_PRESETS[p]}"
+            for p in presets
+            if p in QUICK_UNFITTED_PRESETS
+        ]
         if dropped:
             notes.append(f"quick mode leaves out {', '.join(dropped)} (run without --quick)")
     else:
-        ladders = _grid(presets, variants, budgets, table_budget)
+        ladders = _grid(presets, variants, budgets, table_budget, table_preset)
+        if any(p != table_preset for p in presets) and any(v != "full" for v in variants):
+            notes.append(f"presets other than {table_preset} run only the full variant")
+        if "paper" in presets and "full" in variants:
+            notes.append(f"the paper preset's full variant is fitted: {PAPER_PRESET_COST}")
     sessions = [MAIN_SESSION]
     if table4 is None:
         table4 = not quick
@@ -185,5 +275,12 @@ def make_plan(quick: bool, presets: tuple[str, ...], variants: tuple[str, ...],
     else:
         sessions += TABLE4_SESSIONS
         ladders += [Ladder(s.key, table_preset, "full", (table_budget,)) for s in TABLE4_SESSIONS]
-    return Plan(quick, (4, 2) if quick else (16, 8), tuple(sessions), tuple(ladders),
-                table_preset, table_budget, tuple(notes))
+    return Plan(
+        quick,
+        (4, 2) if quick else (16, 8),
+        tuple(sessions),
+        tuple(ladders),
+        table_preset,
+        table_budget,
+        tuple(notes),
+    )

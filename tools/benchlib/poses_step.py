@@ -1,6 +1,6 @@
 """Give a benchmark session poses before any fit: estimated (the real pipeline) or the truth's.
 
-    python -m benchlib.poses_step --session DIR --bins 4 --source estimated|truth
+python -m benchlib.poses_step --session DIR --bins 4 --source estimated|truth
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     start = time.perf_counter()
     if args.source == "truth":
-        from bench_fit import store_true_poses
+        from davis_io.poses.truth import store_true_poses
 
         store_true_poses(args.session, args.bins)
     else:

@@ -32,7 +32,7 @@ __all__ = [
 POSE_WORDS = {
     "estimated": "estimated from the recording (event-guided COLMAP, as `seecap fit` does)",
     "truth": "the emulator's true camera path (pose estimation not exercised: scores isolate "
-             "the trainer)",
+    "the trainer)",
 }
 
 
@@ -53,11 +53,15 @@ class BenchReport:
     plot_name: str = "speed_vs_error.png"
 
 
-def _at(rows: list[RunRow], session: str, preset: str, variant: str,
-        budget_s: float) -> RunRow | None:
+def _at(
+    rows: list[RunRow], session: str, preset: str, variant: str, budget_s: float
+) -> RunRow | None:
     """The row of that run at the largest budget not above ``budget_s`` (None if none)."""
-    found = [r for r in rows if (r.session, r.preset, r.variant) == (session, preset, variant)
-             and r.budget_s <= budget_s]
+    found = [
+        r
+        for r in rows
+        if (r.session, r.preset, r.variant) == (session, preset, variant) and r.budget_s <= budget_s
+    ]
     return max(found, key=lambda r: r.budget_s) if found else None
 
 
@@ -65,8 +69,10 @@ def comparison_rows(report: BenchReport, axis: str, keys: list[str]) -> dict[str
     """Our run for each row key: a variant on the main session, or a Table 4 session's ``full``."""
     plan = report.plan
     if axis == "session":
-        return {k: _at(report.rows, TABLE4_ROWS[k], plan.table_preset, "full",
-                       plan.table_budget_s) for k in keys}
+        return {
+            k: _at(report.rows, TABLE4_ROWS[k], plan.table_preset, "full", plan.table_budget_s)
+            for k in keys
+        }
     main = plan.sessions[0].key
     return {k: _at(report.rows, main, plan.table_preset, k, plan.table_budget_s) for k in keys}
 
@@ -93,22 +99,47 @@ def target_checks(report: BenchReport) -> list[list[str]]:
     checks = []
     for other, target in (("base", 3.0), ("no-events", 1.0)):
         value = gap(full, rows[other])
-        checks.append(_check(f"full − {other}, HDR PSNR dB", value, f">= {target:g}",
-                             None if value is None else value >= target))
+        checks.append(
+            _check(
+                f"full − {other}, HDR PSNR dB",
+                value,
+                f">= {target:g}",
+                None if value is None else value >= target,
+            )
+        )
     value = gap(rows["oracle"], full)
-    checks.append(_check("oracle − full, HDR PSNR dB", value, "<= 3",
-                         None if value is None else value <= 3))
+    checks.append(
+        _check("oracle − full, HDR PSNR dB", value, "<= 3", None if value is None else value <= 3)
+    )
     fast = _at(report.rows, main, "fast", "full", 600.0)
     for name, attribute in (("HDR PSNR", "hdr_psnr"), ("novel-exposure PSNR", "novel_psnr")):
         value = getattr(fast, attribute) if fast and fast.ok else None
-        checks.append(_check(f"fast within {fmt(fast.budget_s if fast else None, 0)} s: {name} dB",
-                             value, ">= 30", None if value is None else value >= 30))
+        checks.append(
+            _check(
+                f"fast within {fmt(fast.budget_s if fast else None, 0)} s: {name} dB",
+                value,
+                ">= 30",
+                None if value is None else value >= 30,
+            )
+        )
     ratio = report.speed.rays_per_s.get("fast_over_paper") if report.speed else None
-    checks.append(_check("rays/s, fast ÷ paper (same process)", ratio, ">= 100",
-                         None if ratio is None else ratio >= 100))
+    checks.append(
+        _check(
+            "rays/s, fast ÷ paper (same process)",
+            ratio,
+            ">= 100",
+            None if ratio is None else ratio >= 100,
+        )
+    )
     render = fast.render_s_per_view if fast else None
-    checks.append(_check("fast: render one view, s", render, "<= 1",
-                         None if render is None or math.isnan(render) else render <= 1))
+    checks.append(
+        _check(
+            "fast: render one view, s",
+            render,
+            "<= 1",
+            None if render is None or math.isnan(render) else render <= 1,
+        )
+    )
     return checks
 
 
@@ -117,14 +148,40 @@ def _session_lines(report: BenchReport) -> list[str]:
     for s in report.sessions:
         spec = s.spec
         made = f"{fmt(s.record_s, 0)} s" + (" (cached)" if s.cached else "")
-        body.append([spec.key, spec.scene, str(spec.seed), f"{spec.exposure_us / 1e6:g}",
-                     f"{(spec.gain_exposure_us or spec.exposure_us) / 1e6:g}",
-                     f"x{spec.noise_scale:g}", str(s.frames), f"{s.events:,}", made,
-                     fmt(s.poses_s, 0), f"{s.registered} of {s.latent}",
-                     fmt(s.rotation_error_deg), fmt(s.centre_error, 3), s.error or "ready"])
-    headers = ["session", "scene", "seed", "exposure s", "gain set by s", "DVS noise", "frames",
-               "events", "recorded in", f"poses ({report.poses}) s", "poses registered",
-               "rotation error °", "centre error / extent", "status"]
+        body.append(
+            [
+                spec.key,
+                spec.scene,
+                str(spec.seed),
+                f"{spec.exposure_us / 1e6:g}",
+                f"{(spec.gain_exposure_us or spec.exposure_us) / 1e6:g}",
+                f"x{spec.noise_scale:g}",
+                str(s.frames),
+                f"{s.events:,}",
+                made,
+                fmt(s.poses_s, 0),
+                f"{s.registered} of {s.latent}",
+                fmt(s.rotation_error_deg),
+                fmt(s.centre_error, 3),
+                s.error or "ready",
+            ]
+        )
+    headers = [
+        "session",
+        "scene",
+        "seed",
+        "exposure s",
+        "gain set by s",
+        "DVS noise",
+        "frames",
+        "events",
+        "recorded in",
+        f"poses ({report.poses}) s",
+        "poses registered",
+        "rotation error °",
+        "centre error / extent",
+        "status",
+    ]
     return [markdown_table(headers, body)]
 
 
@@ -133,13 +190,31 @@ def _speed_lines(speed: SpeedProbe | None) -> list[str]:
         return ["Not measured (the main session was not ready)."]
     if speed.error:
         return [f"Not measured: {speed.error}"]
-    body = [[name.replace("_over_", " ÷ "), fmt(value, 0 if "_over_" not in name else 1)]
-            for name, value in speed.rays_per_s.items()]
+    body = [
+        [name.replace("_over_", " ÷ "), fmt(value, 0 if "_over_" not in name else 1)]
+        for name, value in speed.rays_per_s.items()
+    ]
     memory = fmt(speed.usage.peak_rss_mb if speed.usage else None, 0)
-    return ["Each preset trained a few steps on the main session's data in one process "
-            f"(`tools/bench_fit.py`'s `speed_table`: no warm start, no renders; the paper preset "
-            f"with a smaller batch); that process peaked at {memory} MB.", "",
-            markdown_table(["preset", "rays/s"], body)]
+    return [
+        "Each preset trained a few steps on the main session's data in one process "
+        "(`tools/bench_fit.py`'s `speed_table`: every preset first trains two untimed "
+        "warm-up steps, then the presets take turns over three timed rounds; no CRF warm "
+        "start, no held-out pixels, no renders; the paper preset with a smaller batch and a "
+        f"tenth of the steps); that process peaked at {memory} MB.",
+        "",
+        markdown_table(["preset", "rays/s"], body),
+    ]
+
+
+def _reuse_line(rows: list[RunRow]) -> str:
+    reused = sum(row.reused for row in rows)
+    if not reused:
+        return f"All {len(rows)} rungs were trained by this invocation."
+    return (
+        f"{reused} of {len(rows)} rungs were read back from an earlier invocation of the same "
+        "command (kept metrics and checkpoint found; their process figures are from that "
+        f"invocation), {len(rows) - reused} trained by this one."
+    )
 
 
 def render_markdown(report: BenchReport) -> str:
@@ -147,38 +222,71 @@ def render_markdown(report: BenchReport) -> str:
     plan = report.plan
     views = f"{plan.views[0]} training + {plan.views[1]} held-out views"
     lines = [
-        "## Speed against error", "",
+        "## Speed against error",
+        "",
         f"Command: `{report.command}` ({'quick' if plan.quick else 'full'} mode), started "
-        f"{report.started_utc}, {report.wall_s / 60:.1f} min wall in total.", "",
-        f"Machine: {report.machine.line()}.", "",
+        f"{report.started_utc}, {report.wall_s / 60:.1f} min wall in total.",
+        "",
+        f"Machine: {report.machine.line()}.",
+        "",
         f"Every number below is regenerated by that command. Sessions are emulated DAVIS346 "
         f"recordings ({views}, b = 4), cached under the output folder; poses: "
         f"{POSE_WORDS.get(report.poses, report.poses)}. "
         "Each training run is its own process; peak memory is that process's maximum resident "
         "set. A budget ladder trains one run and scores it at each budget on the way (resuming "
-        "its checkpoint), so train s and steps are cumulative.", "",
-        *(f"Note: {note}." for note in plan.notes), "",
-        "### Sessions", "", *_session_lines(report), "",
-        "### Every preset and variant against wall time", "", runs_table(report.rows), "",
-        f"![speed against error]({report.plot_name})", "",
-        "### The paper's comparisons on our data", "",
+        "its checkpoint), so train s and steps are cumulative.",
+        "",
+        *(f"Note: {note}." for note in plan.notes),
+        "",
+        _reuse_line(report.rows),
+        "",
+        "### Sessions",
+        "",
+        *_session_lines(report),
+        "",
+        "### Every preset and variant against wall time",
+        "",
+        runs_table(report.rows),
+        "",
+        f"![speed against error]({report.plot_name})",
+        "",
+        "### The paper's comparisons on our data",
+        "",
         f"Preset {plan.table_preset}, budget {plan.table_budget_s:g} s; ours are tone-mapped HDR "
-        "and novel-exposure scores on the held-out views. An ordering is checked on HDR PSNR.", "",
+        "and novel-exposure scores on the held-out views. An ordering is checked on HDR PSNR.",
+        "",
     ]
     for verdict in judge_all(report):
         keys = list(verdict.comparison.rows)
         rows = comparison_rows(report, verdict.comparison.axis, keys)
-        lines += [f"#### {verdict.comparison.title}", "", verdict.comparison.ours, "",
-                  *comparison_lines(verdict, rows), ""]
-    lines += ["### Rays per second of each preset", "", *_speed_lines(report.speed), "",
-              "### Targets of the trainer", "",
-              markdown_table(["target", "measured", "goal", "verdict"], target_checks(report)), "",
-              "### Capture-side throughput", "", capture_table(report.capture), ""]
+        lines += [
+            f"#### {verdict.comparison.title}",
+            "",
+            verdict.comparison.ours,
+            "",
+            *comparison_lines(verdict, rows),
+            "",
+        ]
+    lines += [
+        "### Rays per second of each preset",
+        "",
+        *_speed_lines(report.speed),
+        "",
+        "### Targets of the trainer",
+        "",
+        markdown_table(["target", "measured", "goal", "verdict"], target_checks(report)),
+        "",
+        "### Capture-side throughput",
+        "",
+        capture_table(report.capture),
+        "",
+    ]
     return "\n".join(lines)
 
 
 def write_json(report: BenchReport, path: Path) -> None:
     """Every measured value (runs, verdicts, capture output lines) as JSON."""
+
     def default(value):
         if isinstance(value, Path):
             return str(value)
@@ -187,7 +295,8 @@ def write_json(report: BenchReport, path: Path) -> None:
         return repr(value)
 
     payload = dataclasses.asdict(report)
-    payload["verdicts"] = [{**dataclasses.asdict(v), "summary": v.summary}
-                           for v in judge_all(report)]
+    payload["verdicts"] = [
+        {**dataclasses.asdict(v), "summary": v.summary} for v in judge_all(report)
+    ]
     payload["targets"] = target_checks(report)
     path.write_text(json.dumps(payload, indent=1, default=default, allow_nan=True) + "\n")

@@ -53,6 +53,8 @@ class RunRow:
         last_terms: the loss terms of the last progress record.
         render_s_per_view: seconds to render one test view.
         process: the rung's child process cost.
+        reused: read back from an earlier invocation's kept metrics, not trained this time
+            (``process`` is that invocation's).
     """
 
     session: str
@@ -74,6 +76,7 @@ class RunRow:
     last_terms: dict[str, float] = field(default_factory=dict)
     render_s_per_view: float = NAN
     process: ProcessUsage | None = None
+    reused: bool = False
 
     @property
     def ok(self) -> bool:
@@ -102,8 +105,11 @@ def row_from_metrics(row: RunRow, metrics: dict) -> RunRow:
     row.stopped = str(training.get("stopped", ""))
     row.rays_per_s = _number(training.get("rays_per_s"))
     row.fit_psnr = _number(training.get("best_validation_psnr"))
-    row.last_terms = {k: _number(v) for k, v in history[-1].items()
-                      if k not in ("step", "val_psnr", "steps_per_s", "elapsed_s")}
+    row.last_terms = {
+        k: _number(v)
+        for k, v in history[-1].items()
+        if k not in ("step", "val_psnr", "steps_per_s", "elapsed_s")
+    }
     row.render_s_per_view = _number(metrics.get("render_s_per_view"))
     if "hdr" not in metrics:
         row.status = "no ground truth in metrics.json"
@@ -113,6 +119,7 @@ def row_from_metrics(row: RunRow, metrics: dict) -> RunRow:
     row.novel_psnr = _score(metrics, "novel_exposure", "psnr")
     row.novel_ssim = _score(metrics, "novel_exposure", "ssim")
     ldr = metrics.get("ldr", {})
-    row.ldr_psnr = sorted((float(exposure), _number(score.get("psnr")))
-                          for exposure, score in ldr.items())
+    row.ldr_psnr = sorted(
+        (float(exposure), _number(score.get("psnr"))) for exposure, score in ldr.items()
+    )
     return row

@@ -10,10 +10,13 @@ from benchlib.verdicts import ComparisonVerdict
 
 __all__ = ["capture_table", "comparison_lines", "markdown_table", "runs_table"]
 
+
 def markdown_table(headers: list[str], rows: list[list[str]]) -> str:
     """A GitHub Markdown table; ``|`` inside cells is escaped."""
+
     def line(cells: list[str]) -> str:
         return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
+
     return "\n".join([line(headers), line(["---"] * len(headers)), *map(line, rows)])
 
 
@@ -27,16 +30,46 @@ def runs_table(rows: list[RunRow]) -> str:
     body = []
     for r in ordered:
         usage = r.process
-        body.append([
-            r.session, r.preset, r.variant, _budget(r.budget_s), str(r.steps), fmt(r.train_s, 0),
-            r.stopped or DASH, fmt(r.rays_per_s, 0), fmt(r.hdr_psnr), fmt(r.hdr_ssim, 4),
-            fmt(r.novel_psnr), fmt(r.novel_ssim, 4), fmt(r.render_s_per_view),
-            fmt(usage.wall_s if usage else None, 0), fmt(usage.cpu_s if usage else None, 0),
-            fmt(usage.peak_rss_mb if usage else None, 0), r.status,
-        ])
-    headers = ["session", "preset", "variant", "budget", "steps", "train s", "stopped", "rays/s",
-               "HDR PSNR", "HDR SSIM", "novel PSNR", "novel SSIM", "render s/view",
-               "process wall s", "CPU s", "peak MB", "status"]
+        body.append(
+            [
+                r.session,
+                r.preset,
+                r.variant,
+                _budget(r.budget_s),
+                str(r.steps),
+                fmt(r.train_s, 0),
+                r.stopped or DASH,
+                fmt(r.rays_per_s, 0),
+                fmt(r.hdr_psnr),
+                fmt(r.hdr_ssim, 4),
+                fmt(r.novel_psnr),
+                fmt(r.novel_ssim, 4),
+                fmt(r.render_s_per_view),
+                fmt(usage.wall_s if usage else None, 0),
+                fmt(usage.cpu_s if usage else None, 0),
+                fmt(usage.peak_rss_mb if usage else None, 0),
+                r.status,
+            ]
+        )
+    headers = [
+        "session",
+        "preset",
+        "variant",
+        "budget",
+        "steps",
+        "train s",
+        "stopped",
+        "rays/s",
+        "HDR PSNR",
+        "HDR SSIM",
+        "novel PSNR",
+        "novel SSIM",
+        "render s/view",
+        "process wall s",
+        "CPU s",
+        "peak MB",
+        "status",
+    ]
     return markdown_table(headers, body)
 
 
@@ -47,17 +80,35 @@ def _paper_cell(value: tuple[float, float] | None) -> str:
 def comparison_lines(verdict: ComparisonVerdict, rows: dict[str, RunRow | None]) -> list[str]:
     """The comparison's table (the paper's numbers beside ours) and one line per ordering."""
     comparison: Comparison = verdict.comparison
-    headers = ["row", "paper's name", *(f"paper {c} PSNR / SSIM" for c in comparison.columns),
-               "ours HDR PSNR / SSIM", "ours novel exp. PSNR / SSIM", "steps", "status"]
+    headers = [
+        "row",
+        "paper's name",
+        *(f"paper {c} PSNR / SSIM" for c in comparison.columns),
+        "ours HDR PSNR / SSIM",
+        "ours novel exp. PSNR / SSIM",
+        "steps",
+        "status",
+    ]
     body = []
     for key, (label, values) in comparison.rows.items():
         row = rows.get(key)
-        ours = [DASH, DASH, DASH, "not run"] if row is None else [
-            f"{fmt(row.hdr_psnr)} / {fmt(row.hdr_ssim, 4)}",
-            f"{fmt(row.novel_psnr)} / {fmt(row.novel_ssim, 4)}", str(row.steps), row.status]
+        ours = (
+            [DASH, DASH, DASH, "not run"]
+            if row is None
+            else [
+                f"{fmt(row.hdr_psnr)} / {fmt(row.hdr_ssim, 4)}",
+                f"{fmt(row.novel_psnr)} / {fmt(row.novel_ssim, 4)}",
+                str(row.steps),
+                row.status,
+            ]
+        )
         body.append([key, label, *map(_paper_cell, values), *ours])
-    lines = [markdown_table(headers, body), "",
-             f"**Paper's ordering here: {verdict.summary}.**", ""]
+    lines = [
+        markdown_table(headers, body),
+        "",
+        f"**Paper's ordering here: {verdict.summary}.**",
+        "",
+    ]
     unmeasured = [c.claim for c in verdict.claims if c.outcome == "not measured"]
     words = {"holds": "holds", "reversed": "**reversed**", "tie": "tie"}
     for claim in verdict.claims:
@@ -65,9 +116,11 @@ def comparison_lines(verdict: ComparisonVerdict, rows: dict[str, RunRow | None])
             continue
         said = claim.claim
         gap = claim.better_db - claim.worse_db
-        line = (f"- paper: {said.better} > {said.worse} ({said.better_db:.2f} vs "
-                f"{said.worse_db:.2f} dB, {said.column}); here: {words[claim.outcome]} "
-                f"({claim.better_db:.2f} vs {claim.worse_db:.2f} dB, {gap:+.2f})")
+        line = (
+            f"- paper: {said.better} > {said.worse} ({said.better_db:.2f} vs "
+            f"{said.worse_db:.2f} dB, {said.column}); here: {words[claim.outcome]} "
+            f"({claim.better_db:.2f} vs {claim.worse_db:.2f} dB, {gap:+.2f})"
+        )
         lines.append(line + (f". Measured: {claim.reason}" if claim.reason else ""))
     if unmeasured:
         pairs = ", ".join(f"{c.better} > {c.worse}" for c in unmeasured)
@@ -88,14 +141,18 @@ def capture_table(results: list[CaptureResult]) -> str:
     for result in results:
         usage = result.usage
         memory = fmt(usage.peak_rss_mb if usage else None, 0)
-        for name, (label, _) in result.bench.figures.items():
+        for name, figure in result.bench.figures.items():
             value, target = result.figures.get(name), result.bench.targets.get(name)
             shown = DASH if value is None else f"{value:,.{_digits(name)}f}"
             goal = f"{target[0]} {target[1]:g}" if target else ""
-            verdict = "" if target is None or value is None else (
-                "met" if meets(value, target) else "**missed**")
-            body.append([result.bench.tool, label, shown, goal, verdict, memory])
+            verdict = (
+                ""
+                if target is None or value is None
+                else ("met" if meets(value, target) else "**missed**")
+            )
+            body.append([result.bench.tool, figure.label, shown, goal, verdict, memory])
         if result.error:
             body.append([result.bench.tool, "error", result.error, "", "", memory])
-    return markdown_table(["tool", "figure", "measured", "target", "verdict", "tool's peak MB"],
-                          body)
+    return markdown_table(
+        ["tool", "figure", "measured", "target", "verdict", "tool's peak MB"], body
+    )
