@@ -22,7 +22,7 @@ install: $(STAMP)
 # The main job on the built-in default: the emulated camera recorded, then fitted end to end.
 demo: $(STAMP)
 	$(BIN)/seecap record --emulate room --exposure 0.15 --out $(DEMO_DIR) --overwrite
-	$(BIN)/seecap fit $(DEMO_DIR) --preset fast --time-budget 8m
+	$(BIN)/seecap fit $(DEMO_DIR) --preset fast --time-budget 10m
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q; status=$$?; \

@@ -70,7 +70,7 @@ PRESETS: dict[str, Preset] = {
         space="world",
     ),
     "fast": Preset(
-        "CPU default: vector-matrix field, occupancy-grid sampling, minutes on 2 cores",
+        "CPU default: vector-matrix field in NDC, occupancy-grid sampling, 10 minutes on 2 cores",
         field="vector-matrix",
         field_args={"resolution": 128, "density_rank": 8, "appearance_rank": 16, "hidden": 32},
         sampler=SamplerSpec(
@@ -82,7 +82,7 @@ PRESETS: dict[str, Preset] = {
             render_fine=6,
         ),
         pixels_per_step=512,
-        steps=3000,
+        steps=6000,
         lr=0.02,
         smoothness=0.05,
         max_resolution=192,
