@@ -87,6 +87,7 @@ PRESETS: dict[str, Preset] = {
         smoothness=0.05,
         max_resolution=192,
         grid_every=50,
+        patience=8,
     ),
     "balanced": Preset(
         "CPU, more capacity and samples than fast: about 3x the time for finer detail",

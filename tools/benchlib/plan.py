@@ -177,9 +177,11 @@ def _grid(
     """The main session's ladders: ``full`` of every preset climbs every budget (the table
     preset's also stops at the table budget, so the comparisons read every variant at the same
     budget); the table preset's other variants run once, at the table budget; other presets
-    run only ``full``."""
+    run only ``full``. The table preset comes first and ``paper`` (the slowest) last, so an
+    interrupted run has the comparisons before the costliest rungs."""
     ladders = []
-    for preset in presets:
+    order = sorted(presets, key=lambda p: (p != table_preset, p == "paper"))
+    for preset in order:
         for variant in variants:
             if variant == "full":
                 rungs = (
