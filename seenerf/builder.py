@@ -16,8 +16,9 @@ from seenerf.presets import Preset, get_preset, size_field
 from seenerf.radiance import RadianceRenderer
 from seenerf.rays import in_any_view, scene_box_from_cameras
 from seenerf.variants import LOW_PASS_READINGS, get_variant
+from seenerf.views import truth_to_fit_frame
 
-__all__ = ["build_model", "resolve_device", "training_poses"]
+__all__ = ["build_model", "resolve_device", "training_frame"]
 
 
 def resolve_device(name: str) -> str:
@@ -35,8 +36,11 @@ def resolve_device(name: str) -> str:
     return name
 
 
-def training_poses(data: TrainingData, config: FitConfig) -> np.ndarray:
-    """Poses the field is trained at: estimated latent poses, or the truth's for the oracle.
+def training_frame(data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Poses the field is trained at and the scene's near / far depth in their frame.
+
+    The estimated latent poses and their bounds, or for the oracle the truth's poses with the
+    bounds rescaled into the truth's frame (estimated poses are known up to a similarity).
 
     Raises:
         ConfigError: the oracle needs truth, the multi-exposure variant several exposures.
@@ -45,33 +49,34 @@ def training_poses(data: TrainingData, config: FitConfig) -> np.ndarray:
     if variant.supervision == "sharp-hdr":
         if data.truth is None:
             raise ConfigError("variant oracle needs ground truth (an emulated session with truth/)")
-        return data.truth.c2w
+        scale = truth_to_fit_frame(data).scale
+        return data.truth.c2w, (np.asarray(data.bounds, np.float64) / scale).astype(np.float32)
     if variant.supervision == "multi-exposure" and len(np.unique(data.exposure_s)) < 2:
         raise ConfigError(
             "variant multi-exposure needs frames of at least two exposures; this session has "
             f"one ({float(data.exposure_s[0]):g} s): record with several exposures"
         )
-    return data.c2w
+    return data.c2w, data.bounds
 
 
 def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[SeeNerfModel, Preset]:
     """The model and the preset resized for this scene (field resolution from extent and sensor)."""
     variant = get_variant(config.variant)
-    poses = training_poses(data, config)
+    poses, bounds = training_frame(data, config)
     preset = get_preset(config.preset)
     space = (
-        forward_facing_space(poses, data.intrinsics, data.bounds, data.image_size)
+        forward_facing_space(poses, data.intrinsics, bounds, data.image_size)
         if preset.space == "auto"
         else None
     )
     if space is not None:
-        box = frustum_box(space, poses, data.intrinsics, data.bounds, data.image_size)
-        view_bounds = np.array([space.near, 1.5 * float(data.bounds[1])])
+        box = frustum_box(space, poses, data.intrinsics, bounds, data.image_size)
+        view_bounds = np.array([space.near, 1.5 * float(bounds[1])])
         preset = size_field(preset, box.size / 2.0 * data.image_size[1])  # image: 2 NDC units
     else:
-        box = scene_box_from_cameras(poses, data.intrinsics, data.bounds, data.image_size)
-        view_bounds = data.bounds
-        median_depth = float(np.sqrt(data.bounds[0] * data.bounds[1]))
+        box = scene_box_from_cameras(poses, data.intrinsics, bounds, data.image_size)
+        view_bounds = bounds
+        median_depth = float(np.sqrt(bounds[0] * bounds[1]))
         preset = size_field(preset, float(data.intrinsics[0]) * box.size / median_depth)
     renderer = RadianceRenderer(preset.field, preset.field_args, preset.sampler, box, space)
     if renderer.grid is not None:
@@ -98,8 +103,8 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
         renderer,
         variant,
         spec,
-        float(data.bounds[0]),
-        float(data.bounds[1]),
+        float(bounds[0]),
+        float(bounds[1]),
         float(np.median(data.exposure_s)),
         crf_args={
             "anchor_log_exposure": config.anchor_log_exposure,
