@@ -36,6 +36,15 @@ def resolve_device(name: str) -> str:
     return name
 
 
+def crf_arguments(crf: str, data: TrainingData, config: FitConfig) -> dict:
+    """Keyword arguments of the variant's RGB response: the anchor, or the truth's table."""
+    if crf == "true":
+        if data.truth is None or not len(data.truth.crf_value):
+            raise ConfigError("the true response is unknown: this session's truth has no crf/")
+        return {"log_exposure": data.truth.crf_log_exposure, "values": data.truth.crf_value}
+    return {"anchor_log_exposure": config.anchor_log_exposure, "anchor_value": config.anchor_value}
+
+
 def training_frame(data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
     """Poses the field is trained at and the scene's near / far depth in their frame.
 
@@ -106,10 +115,7 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
         float(bounds[0]),
         float(bounds[1]),
         float(np.median(data.exposure_s)),
-        crf_args={
-            "anchor_log_exposure": config.anchor_log_exposure,
-            "anchor_value": config.anchor_value,
-        },
+        crf_args=crf_arguments(variant.crf, data, config),
         event_args={"threshold": config.threshold, "cutoff_hz": config.cutoff_hz},
     )
     return model.to(device), preset

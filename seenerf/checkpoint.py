@@ -44,6 +44,16 @@ def _read(path: Path) -> dict:
         ) from error
 
 
+def _load_weights(path: Path, model, weights: dict) -> None:
+    try:
+        model.load_state_dict(weights)
+    except RuntimeError as error:  # parameters missing, unexpected or of another shape
+        raise CheckpointError(
+            f"{path}: its weights do not fit this version's model ({error}); "
+            "refit with --fresh"
+        ) from error
+
+
 def load_checkpoint(path: Path, trainer) -> None:
     """Restore ``trainer`` from ``path``.
 
@@ -56,7 +66,7 @@ def load_checkpoint(path: Path, trainer) -> None:
             f"{path} was written by a fit with another configuration; run with --fresh to start "
             "over or choose another --run name"
         )
-    trainer.model.load_state_dict(state["model"])
+    _load_weights(path, trainer.model, state["model"])
     trainer.optimizer.load_state_dict(state["optimizer"])
     grid = trainer.model.renderer.grid
     if grid is not None and state["grid_density"].numel():
@@ -71,9 +81,13 @@ def load_checkpoint(path: Path, trainer) -> None:
 
 
 def load_model_state(path: Path, model) -> None:
-    """Load only the model weights (and occupancy grid) of a checkpoint, for rendering."""
+    """Load only the model weights (and occupancy grid) of a checkpoint, for rendering.
+
+    Raises:
+        CheckpointError: unreadable file, or weights of another model.
+    """
     state = _read(path)
-    model.load_state_dict(state["model"])
+    _load_weights(path, model, state["model"])
     grid = model.renderer.grid
     if grid is not None and state["grid_density"].numel():
         grid.density = state["grid_density"]

@@ -11,13 +11,13 @@ from torch import nn
 from seenerf.radiance import RadianceRenderer
 from seenerf.sensors.event_crf import EventCrf, EventModelSpec
 from seenerf.sensors.exposure import blur_log_radiance
-from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf
+from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf
 from seenerf.variants import Variant
 
 __all__ = ["CRFS", "IMAGING", "Prediction", "RayBatch", "SeeNerfModel"]
 
-CRFS = {"mlp": RgbCrf, "power": PowerCrf}
-"""RGB response models by name (``none`` means no response model)."""
+CRFS = {"mlp": RgbCrf, "power": PowerCrf, "true": TabulatedCrf}
+"""RGB response models by name (``none`` means no response model; ``true`` is a known table)."""
 
 
 @dataclass

@@ -23,6 +23,7 @@ from seenerf.export import (
 from seenerf.model import SeeNerfModel
 from seenerf.perceptual import lpips_scorer
 from seenerf.registration import register_view
+from seenerf.sensors.rgb_crf import TabulatedCrf
 from seenerf.views import IDENTITY, render_log_image, truth_to_fit_frame
 
 __all__ = [
@@ -195,9 +196,9 @@ def learned_crf(
     """The learned response ``(x, (N, 3) values)`` on the truth's ln(radiance x s) axis.
 
     The model's radiance is known up to the CRF anchor; its per-channel HDR scale against the
-    truth (when scored) shifts the curve onto the truth's axis. None without a CRF.
+    truth (when scored) shifts the curve onto the truth's axis. None without a learned CRF.
     """
-    if model.crf is None:
+    if model.crf is None or isinstance(model.crf, TabulatedCrf):
         return None
     log_exposure = np.linspace(-8.0, 6.0, 141, dtype=np.float32)
     with torch.no_grad():

@@ -19,7 +19,8 @@ class Variant:
         imaging: ``pixel`` (blur in linear HDR, then the RGB CRF per pixel: the paper),
             ``point`` (CRF on every 3-D sample, blur in LDR: HDR-NeRF style) or ``ldr-field``
             (the field renders LDR directly, blur in LDR, no CRF).
-        crf: ``mlp`` (three per-channel MLPs), ``power`` (x^a) or ``none``.
+        crf: ``mlp`` (three per-channel MLPs), ``power`` (x^a), ``true`` (the truth's table,
+            the oracle) or ``none``.
         events: the event model, or None for no event loss.
         supervision: ``blurry`` (recorded frames), ``multi-exposure`` (frames of several
             exposures, no events) or ``sharp-hdr`` (truth sharp HDR at true poses: the oracle).
@@ -62,8 +63,9 @@ VARIANTS: dict[str, Variant] = {
         supervision="multi-exposure",
     ),
     "oracle": Variant(
-        "upper bound: the same field trained on truth sharp linear HDR at true poses",
-        crf="mlp",
+        "upper bound: the same field trained on truth sharp linear HDR at true poses, "
+        "LDR views through the true response",
+        crf="true",
         events=None,
         supervision="sharp-hdr",
     ),

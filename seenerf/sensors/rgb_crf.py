@@ -8,7 +8,15 @@ import torch
 import torch.nn.functional as F  # noqa: N812
 from torch import nn
 
-__all__ = ["PowerCrf", "RgbCrf", "apply_power_crf", "apply_rgb_crf", "warm_start_target"]
+__all__ = [
+    "PowerCrf",
+    "RgbCrf",
+    "TabulatedCrf",
+    "apply_power_crf",
+    "apply_rgb_crf",
+    "interpolate_response",
+    "warm_start_target",
+]
 
 
 def apply_rgb_crf(
@@ -37,6 +45,26 @@ def apply_rgb_crf(
 def apply_power_crf(log_exposure: torch.Tensor, exponent: torch.Tensor) -> torch.Tensor:
     """EvHDR-GS response ``min(x^a, 1)``, x = radiance x seconds, one exponent for all channels."""
     return torch.exp(exponent * log_exposure).clamp(max=1.0)
+
+
+def interpolate_response(
+    log_exposure: torch.Tensor, table_x: torch.Tensor, table_values: torch.Tensor
+) -> torch.Tensor:
+    """Piecewise-linear response of each channel from a table, held constant beyond its ends.
+
+    Args:
+        log_exposure: ``(..., 3)`` ln(radiance x seconds) per channel.
+        table_x: ``(K,)`` increasing sample positions.
+        table_values: ``(K, 3)`` response of each channel at ``table_x``.
+    """
+    x = log_exposure.clamp(float(table_x[0]), float(table_x[-1]))
+    upper = torch.searchsorted(table_x, x.detach().contiguous()).clamp(1, len(table_x) - 1)
+    lower = upper - 1
+    x0, x1 = table_x[lower], table_x[upper]
+    channel = torch.arange(3, device=x.device).expand_as(upper)
+    y0, y1 = table_values[lower, channel], table_values[upper, channel]
+    t = (x - x0) / (x1 - x0).clamp(min=1e-12)
+    return y0 + t * (y1 - y0)
 
 
 def warm_start_target(x: torch.Tensor) -> torch.Tensor:
@@ -102,6 +130,36 @@ class PowerCrf(nn.Module):
     def anchor_loss(self) -> torch.Tensor:
         """The power curve has no free offset to anchor; zero."""
         return self.exponent.new_zeros(())
+
+    def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
+        """Nothing to warm up."""
+        return 0.0
+
+
+class TabulatedCrf(nn.Module):
+    """A known response (the emulator's truth), nothing to learn: the oracle's LDR views.
+
+    Args:
+        log_exposure: ``(K,)`` increasing ln(radiance x seconds) samples.
+        values: ``(K, 3)`` response at those samples.
+    """
+
+    def __init__(self, log_exposure, values):
+        super().__init__()
+        self.register_buffer(
+            "table_x", torch.as_tensor(log_exposure, dtype=torch.float32), persistent=False
+        )
+        self.register_buffer(
+            "table_values", torch.as_tensor(values, dtype=torch.float32), persistent=False
+        )
+
+    def forward(self, log_exposure: torch.Tensor) -> torch.Tensor:
+        """See :func:`interpolate_response`."""
+        return interpolate_response(log_exposure, self.table_x, self.table_values)
+
+    def anchor_loss(self) -> torch.Tensor:
+        """A known response needs no anchor; zero."""
+        return self.table_x.new_zeros(())
 
     def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
         """Nothing to warm up."""

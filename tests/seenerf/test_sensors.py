@@ -16,6 +16,7 @@ from seenerf.sensors.exposure import blur_log_radiance
 from seenerf.sensors.rgb_crf import (
     PowerCrf,
     RgbCrf,
+    TabulatedCrf,
     apply_power_crf,
     apply_rgb_crf,
     warm_start_target,
@@ -44,6 +45,18 @@ def test_power_crf_hand_values():
     out = apply_power_crf(torch.log(torch.tensor([0.25, 4.0])), torch.tensor(0.5))
     assert out.tolist() == pytest.approx([0.5, 1.0])
     assert PowerCrf().anchor_loss() == 0
+
+
+def test_tabulated_crf_interpolates_each_channel_and_holds_its_ends():
+    table_x = [-1.0, 0.0, 2.0]
+    values = [[0.0, 0.1, 0.2], [0.5, 0.3, 0.4], [1.0, 0.9, 0.8]]
+    crf = TabulatedCrf(table_x, values)
+    u = torch.tensor([[-0.5, 1.0, 5.0], [-3.0, 0.0, 0.5]])
+    # channel 0 at -0.5: halfway 0 -> 0.5; channel 1 at 1: halfway 0.3 -> 0.9; channel 2 at 5:
+    # beyond the end, 0.8. Row 2: below the start 0.0; on a knot 0.3; channel 2 a quarter of
+    # the way from 0.4 to 0.8.
+    assert crf(u).tolist() == [pytest.approx([0.25, 0.6, 0.8]), pytest.approx([0.0, 0.3, 0.5])]
+    assert crf.anchor_loss() == 0 and not list(crf.parameters())
 
 
 def test_rgb_crf_warm_start_reaches_reference_curve():

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import torch
 
+from seenerf.builder import build_model
 from seenerf.config import FitConfig
 from seenerf.errors import CheckpointError, ConfigError
 from seenerf.presets import PRESETS
@@ -100,6 +101,15 @@ def test_damaged_checkpoint_is_a_typed_error(tiny_scene, tmp_path):
         Trainer(tiny_scene, _config(), tmp_path).train()
 
 
+def test_checkpoint_of_another_model_is_a_typed_error(tiny_scene, tmp_path):
+    from seenerf.checkpoint import load_model_state
+
+    Trainer(tiny_scene, _config(steps=1), tmp_path, log=lambda line: None).train()
+    other, _ = build_model(tiny_scene, _config(variant="base"), "cpu")
+    with pytest.raises(CheckpointError, match=r"(?s)do not fit this version's model.*--fresh"):
+        load_model_state(tmp_path / "checkpoint.pt", other)
+
+
 def test_time_budget_stops_training(tiny_scene):
     summary = Trainer(
         tiny_scene, _config(steps=10_000, time_budget_s=0.5), log=lambda line: None
@@ -130,3 +140,15 @@ def test_oracle_bounds_follow_the_truth_frame_not_the_estimated_one():
     assert poses is scene.truth.c2w
     _, estimated_bounds = training_frame(scene, _config())
     np.testing.assert_allclose(estimated_bounds, [10.0, 30.0])
+
+
+def test_oracle_ldr_views_use_the_true_response():
+    from seenerf.synthetic import true_response
+
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
+    model, _ = build_model(scene, _config(variant="oracle"), "cpu")
+    log_radiance = torch.tensor([[-4.0, -2.0, 1.5]])
+    expected = true_response(np.array([-4.0, -2.0, 1.5]) + np.log(0.064))
+    np.testing.assert_allclose(
+        model.ldr_from_log(log_radiance, 0.064)[0].numpy(), expected, atol=2e-3
+    )
