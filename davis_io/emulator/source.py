@@ -192,7 +192,12 @@ class EmulatedCamera(Closing):
             color_filter=self.config.color_filter,
             origin=f"emulator:{self.config.scene}",
             extra={
-                "emulator": {**asdict(self.config), "color_filter": self.config.color_filter.value}
+                "emulator": {
+                    **asdict(self.config),
+                    "color_filter": self.config.color_filter.value,
+                    "dvs_threshold_on": DVS_PRESETS[self.config.dvs_preset].threshold_on,
+                    "dvs_threshold_off": DVS_PRESETS[self.config.dvs_preset].threshold_off,
+                }
             },
         )
 

@@ -117,14 +117,18 @@ def known_response(session: Session) -> ResponseCurve | None:
 
 
 def stated_threshold(session: Session) -> float | None:
-    """The DVS contrast threshold the camera configuration states (the emulator's preset)."""
-    preset = session.manifest.device_config.get("emulator", {}).get("dvs_preset")
-    if preset is None:
-        return None
+    """The DVS contrast threshold the camera configuration states (the emulator's), or None.
+
+    The mean of the recorded ON and OFF thresholds; sessions recorded before those were
+    stored name a DVS preset instead, looked up when it is a built-in one.
+    """
+    emulator = session.manifest.device_config.get("emulator", {})
+    if "dvs_threshold_on" in emulator and "dvs_threshold_off" in emulator:
+        return 0.5 * (float(emulator["dvs_threshold_on"]) + float(emulator["dvs_threshold_off"]))
     from davis_io.emulator import DVS_PRESETS
 
-    params = DVS_PRESETS[preset]
-    return 0.5 * (params.threshold_on + params.threshold_off)
+    params = DVS_PRESETS.get(emulator.get("dvs_preset"))
+    return None if params is None else 0.5 * (params.threshold_on + params.threshold_off)
 
 
 def _write_latent_frames(session, bins, threshold, response, image_dir, progress):

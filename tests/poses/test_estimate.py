@@ -97,3 +97,28 @@ def test_read_intrinsics(tmp_path):
     for bad in ("bad.txt", "missing.json"):
         with pytest.raises(UsageError):
             read_intrinsics(tmp_path / bad)
+
+
+@pytest.mark.parametrize(
+    "emulator, expected",
+    [
+        ({"dvs_threshold_on": 0.2, "dvs_threshold_off": 0.3, "dvs_preset": "noisy"}, 0.25),
+        ({"dvs_preset": "noisy"}, 0.3),  # recorded before the thresholds were: the preset's
+        ({"dvs_preset": "noisy-x2"}, None),  # a preset another process registered: unknown
+        ({}, None),
+    ],
+)
+def test_stated_threshold_prefers_the_recorded_thresholds(emulator, expected):
+    from types import SimpleNamespace
+
+    from davis_io.poses.estimate import stated_threshold
+
+    session = SimpleNamespace(manifest=SimpleNamespace(device_config={"emulator": emulator}))
+    assert stated_threshold(session) == (None if expected is None else pytest.approx(expected))
+
+
+def test_emulated_camera_records_its_thresholds():
+    from davis_io.emulator import EmulatedCamera
+
+    extra = EmulatedCamera("room", dvs_preset="noisy").info.extra["emulator"]
+    assert (extra["dvs_threshold_on"], extra["dvs_threshold_off"]) == (0.3, 0.3)
