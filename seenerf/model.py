@@ -11,13 +11,16 @@ from torch import nn
 from seenerf.radiance import RadianceRenderer
 from seenerf.sensors.event_crf import EventCrf, EventModelSpec
 from seenerf.sensors.exposure import blur_log_radiance
-from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf
+from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf, interpolate_response
 from seenerf.variants import Variant
 
-__all__ = ["CRFS", "IMAGING", "Prediction", "RayBatch", "SeeNerfModel"]
+__all__ = ["CRFS", "IMAGING", "RESPONSE_TABLE_SIZE", "Prediction", "RayBatch", "SeeNerfModel"]
 
 CRFS = {"mlp": RgbCrf, "power": PowerCrf, "true": TabulatedCrf}
 """RGB response models by name (``none`` means no response model; ``true`` is a known table)."""
+
+RESPONSE_TABLE_SIZE = 16_384
+"""Samples of the learned response tabulated for whole images (:meth:`SeeNerfModel.ldr_images`)."""
 
 
 @dataclass
@@ -176,3 +179,21 @@ class SeeNerfModel(nn.Module):
             ratio = exposure_s / self.reference_exposure_s
             return (torch.sigmoid(log_radiance) * ratio).clamp(0.0, 1.0)
         return self.crf(log_radiance + math.log(exposure_s))
+
+    def ldr_images(self, log_radiance: torch.Tensor, exposures_s) -> list[torch.Tensor]:
+        """:meth:`ldr_from_log` at each exposure, for whole images.
+
+        The learned response is a function of one value per channel, so it is evaluated once
+        on a grid of :data:`RESPONSE_TABLE_SIZE` points spanning every value the images need
+        and interpolated: a 346x260 view at five exposures asks the MLPs for 16,384 values per
+        channel instead of 450,000 (the interpolation error stays below 1e-3, a quarter of an
+        8-bit level).
+        """
+        if self.variant.imaging == "ldr-field" or not isinstance(self.crf, RgbCrf):
+            return [self.ldr_from_log(log_radiance, exposure) for exposure in exposures_s]
+        shifts = [math.log(exposure) for exposure in exposures_s]
+        low = float(log_radiance.min()) + min(shifts)
+        high = float(log_radiance.max()) + max(shifts)
+        grid = torch.linspace(low, high, RESPONSE_TABLE_SIZE, device=log_radiance.device)
+        table = self.crf(grid[:, None].expand(-1, 3))
+        return [interpolate_response(log_radiance + shift, grid, table) for shift in shifts]

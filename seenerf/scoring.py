@@ -81,12 +81,12 @@ def render_views(
             hdr = model.hdr_from_log(log_image).numpy() @ _LUMINANCE
             log_lum = torch.log(torch.as_tensor(hdr).clamp(min=1e-30))[..., None].expand(-1, -1, 3)
             views.hdr.append(hdr[..., None])
-            for index, exposure in enumerate(exposures_s):
-                views.ldr[index].append(model.ldr_from_log(log_lum, exposure)[..., :1].numpy())
+            for index, ldr in enumerate(model.ldr_images(log_lum, exposures_s)):
+                views.ldr[index].append(ldr[..., :1].numpy())
         else:
             views.hdr.append(model.hdr_from_log(log_image).numpy())
-            for index, exposure in enumerate(exposures_s):
-                views.ldr[index].append(model.ldr_from_log(log_image, exposure).numpy())
+            for index, ldr in enumerate(model.ldr_images(log_image, exposures_s)):
+                views.ldr[index].append(ldr.numpy())
     views.render_s = (time.perf_counter() - start) / max(len(views.c2w), 1)
     return views
 

@@ -152,3 +152,17 @@ def test_oracle_ldr_views_use_the_true_response():
     np.testing.assert_allclose(
         model.ldr_from_log(log_radiance, 0.064)[0].numpy(), expected, atol=2e-3
     )
+
+
+def test_whole_image_ldr_matches_the_response_per_pixel():
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
+    model, _ = build_model(scene, _config(), "cpu")
+    with torch.no_grad():
+        model.crf.weight_in.mul_(4.0)  # kinks steeper than the warm start's
+    log_radiance = torch.linspace(-12.0, 6.0, 6000).reshape(2000, 3)
+    exposures = (0.001, 0.016, 0.256)
+    with torch.no_grad():
+        tabulated = model.ldr_images(log_radiance, exposures)
+        for image, exposure in zip(tabulated, exposures, strict=True):
+            direct = model.ldr_from_log(log_radiance, exposure)
+            assert (image - direct).abs().max() < 1e-3
