@@ -2,12 +2,8 @@
 
 from __future__ import annotations
 
-import os
 import struct
-import threading
-from collections import deque
 from collections.abc import Iterator
-from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -39,22 +35,15 @@ __all__ = ["Aedat4Reader", "clip_packet"]
 _PACKET_HEADER = struct.Struct("<ii")
 _CODEC_ERRORS = (RuntimeError, ValueError, zstandard.ZstdError)
 _FRAME_SLACK_US = 10_000_000  # a frame's table stamp (DV: exposure midpoint) is at most this late
-_IN_FLIGHT_PER_THREAD = 2  # packets read ahead per decoding thread
-
-DECODE_THREADS = min(2, os.cpu_count() or 1)
-"""Threads that decompress and decode packets while the file is read (1: all in the caller's)."""
 
 
 class Aedat4Reader(FileReader):
     """An AEDAT 4.0 file as a :class:`~davis_io.types.PacketSource`.
 
     The header is read on construction (so ``info`` is known at once); iteration walks the
-    packets from the start each time and yields them in file order. The caller's thread reads
-    the packets; ``threads`` workers decompress and decode them, a few packets ahead (LZ4,
-    zstd and numpy's copies release the GIL, so two cores decode two packets at once). Each
-    worker decompresses into a buffer of its own reused from packet to packet (see
-    :func:`packet_decompressor`) and decodes into arrays of the packet's own. A packet that
-    fails raises in its turn, after every packet before it was yielded.
+    packets from the start each time, reading one packet at a time. Each packet is
+    decompressed into a buffer reused for the next one (see :func:`packet_decompressor`) and
+    decoded into arrays of its own before the next is read.
 
     Attributes:
         info: camera, resolution and file facts (``extra``: format, compression, streams).
@@ -62,19 +51,13 @@ class Aedat4Reader(FileReader):
         data_table: the FileDataTable rows, or None when the file has none.
     """
 
-    def __init__(self, path: str | Path, threads: int = DECODE_THREADS):
+    def __init__(self, path: str | Path):
         """Open ``path`` and read its header and data table.
-
-        Args:
-            path: the recording.
-            threads: decoding threads; 1 decodes in the iterating thread.
 
         Raises:
             FormatError: empty file, wrong magic, or a malformed header.
         """
         super().__init__(path)
-        self.threads = max(1, threads)
-        self._local = threading.local()
         try:
             self._read_header()
         except BaseException:
@@ -91,35 +74,13 @@ class Aedat4Reader(FileReader):
 
     def __iter__(self) -> Iterator[Packet]:
         notes = list(self._header_notes)
-        for item in self._decoded():
+        for item in self._walk():
             if isinstance(item, str):
                 notes.append(item)
             else:
-                yield _with_notes(item, notes)
+                yield _with_notes(self._decode(*item), notes)
         if notes:
             yield Packet(notes=notes)
-
-    def _decoded(self) -> Iterator[Packet | str]:
-        """:meth:`_walk` with each packet decoded, in file order."""
-        if self.threads == 1:
-            for item in self._walk():
-                yield item if isinstance(item, str) else self._decode(*item)
-            return
-        in_flight = self.threads * _IN_FLIGHT_PER_THREAD
-        with ThreadPoolExecutor(self.threads, thread_name_prefix="aedat4-decode") as pool:
-            pending: deque[Future | str] = deque()
-            try:
-                for item in self._walk():
-                    is_note = isinstance(item, str)
-                    pending.append(item if is_note else pool.submit(self._decode, *item))
-                    while pending and (len(pending) > in_flight or isinstance(pending[0], str)):
-                        yield _result(pending.popleft())
-                while pending:
-                    yield _result(pending.popleft())
-            finally:
-                for future in pending:
-                    if isinstance(future, Future):
-                        future.cancel()
 
     def _walk(self) -> Iterator[tuple[int, int, int, bytes] | str]:
         """Read packets in file order: (index, offset, stream id, payload) or a note string.
@@ -198,6 +159,7 @@ class Aedat4Reader(FileReader):
         except FormatError as error:
             raise FormatError(f"bad IOHeader: {error}", path=path, offset=len(MAGIC)) from None
         self.compression = header.compression
+        self._decompress = packet_decompressor(self.compression)
         self._data_start = len(MAGIC) + 4 + length
         self._data_end, self._header_notes = file_size, []
         self.data_table: list[DataTableEntry] | None = None
@@ -258,18 +220,11 @@ class Aedat4Reader(FileReader):
         stream = self.streams[stream_id]
         type_id = stream.type_identifier
         try:
-            return _DECODERS[type_id](stream, self._thread_decompressor()(payload))
+            return _DECODERS[type_id](stream, self._decompress(payload))
         except (FormatError, *_CODEC_ERRORS) as error:
             message = error if isinstance(error, FormatError) else f"cannot decompress: {error}"
             raise FormatError(f"packet {index} (stream {stream_id}, {type_id}): {message}",
                               path=str(self.path), offset=offset) from None
-
-    def _thread_decompressor(self):
-        """This thread's :func:`packet_decompressor` (its output buffer is the thread's own)."""
-        decompress = getattr(self._local, "decompress", None)
-        if decompress is None:
-            decompress = self._local.decompress = packet_decompressor(self.compression)
-        return decompress
 
     def _skip_note(self, index: int, offset: int, stream_id: int, type_id: str) -> str:
         kind = f"type {type_id!r}" if type_id else "not described in the infoNode"
@@ -283,10 +238,6 @@ def _frame_packet(stream: StreamDescription, buf: bytes) -> Packet:
     depth = stream.info.get(FRAME_BIT_DEPTH_KEY, "16")
     bit_depth = int(depth) if depth.isdigit() and 1 <= int(depth) <= 16 else 16
     return Packet(frames=[decode_frame(buf, bit_depth)])
-
-
-def _result(item: Future | str) -> Packet | str:
-    return item if isinstance(item, str) else item.result()
 
 
 def _with_notes(packet: Packet, notes: list[str]) -> Packet:

@@ -118,31 +118,3 @@ def test_data_table_time_range_and_range_read(aestream_aedat4):
     assert [f.exposure_start_us for p in packets for f in p.frames] == [1633953691016518]
     assert sum(len(p.imu) for p in packets) == int(((imu["t"] >= start) & (imu["t"] < end)).sum())
     assert read_rows < 40  # the table let it skip packets outside the range
-
-
-def test_threaded_decoding_yields_what_one_thread_does(aestream_aedat4):
-    def read(threads):
-        with Aedat4Reader(aestream_aedat4, threads=threads) as reader:
-            return list(reader)
-
-    alone, threaded = read(1), read(2)
-    assert len(alone) == len(threaded) > 10
-    for one, other in zip(alone, threaded, strict=True):
-        np.testing.assert_array_equal(one.events, other.events)
-        np.testing.assert_array_equal(one.imu, other.imu)
-        assert [f.exposure_start_us for f in one.frames] == [
-            f.exposure_start_us for f in other.frames
-        ]
-        for a, b in zip(one.frames, other.frames, strict=True):
-            np.testing.assert_array_equal(a.image, b.image)
-
-
-def test_stopping_early_leaves_the_reader_usable(aestream_aedat4):
-    with Aedat4Reader(aestream_aedat4, threads=2) as reader:
-        packets = iter(reader)
-        first = next(packets)
-        packets.close()  # the read-ahead is cancelled or finished, never left running
-        again = next(iter(reader))
-        total = sum(len(p.events) for p in reader)
-    np.testing.assert_array_equal(first.events, again.events)
-    assert total == len(_read_all(aestream_aedat4)[1])

@@ -60,7 +60,6 @@ CAPTURE_BENCHES = (
             "ours_mev_s": Figure("ours, M events/s", "ours_ev_s", 1e-6),
             "dv_mev_s": Figure("dv-processing, M events/s", "dv_ev_s", 1e-6),
             "ratio": Figure("ours / dv-processing", "ratio"),
-            "ratio_one_thread": Figure("ours on one thread / dv-processing", "ratio_one_thread"),
         },
     ),
     CaptureBench(
