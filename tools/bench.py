@@ -11,7 +11,7 @@ One command regenerates every number of the report:
    ``OUT/sessions/`` with their poses and reused by later runs.
 2. Runs: each preset x variant, each in its own ``seecap fit`` process per budget (a ladder of
    budgets resumes one run), scored on the held-out views against the emulator's truth. The
-   full plan is 72 minutes of training, about 100 minutes in all on a 2-core machine
+   full plan is 62 minutes of training, about 100 minutes in all on a 2-core machine
    (``benchlib/plan.py``).
 3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here.
 4. Capture side: ``bench_decode.py``, ``bench_usb.py`` and ``bench_record.py``.

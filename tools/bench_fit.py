@@ -39,8 +39,9 @@ def machine() -> str:
     )
 
 
-SPEED_BATCH_PIXELS = {"fast": 256, "balanced": 256, "paper": 32}
-"""Blurry pixels per step of each preset in the speed table (the paper preset's MLP is slow)."""
+SPEED_BATCH_PIXELS = {"fast": 0, "balanced": 0, "paper": 32}
+"""Blurry pixels per step of each preset in the speed table: the CPU presets' own batch (0),
+a smaller one for the paper preset, whose MLP at its published 1,024 holds over 13 GB here."""
 
 
 def speed_trainer(data, preset: str) -> Trainer:
@@ -55,6 +56,14 @@ def speed_trainer(data, preset: str) -> Trainer:
     return Trainer(data, config, log=lambda line: None)
 
 
+def warm_up_steps(trainer: Trainer) -> int:
+    """Untimed steps before timing: two, and for an occupancy-grid sampler two grid refreshes,
+    so the timed steps skip empty space as a fit's steps do after its first seconds."""
+    if trainer.model.renderer.grid is None:
+        return 2
+    return 2 * trainer.preset.grid_every
+
+
 def timed_steps(trainer: Trainer, steps: int) -> tuple[int, float]:
     """Train ``steps`` more steps; return the rays rendered and the seconds taken."""
     trainer.total_steps = trainer.summary.steps + steps
@@ -67,14 +76,15 @@ def timed_steps(trainer: Trainer, steps: int) -> tuple[int, float]:
 def speed_table(data, steps: int, rounds: int = 3) -> dict:
     """Rays per second of each preset on the same data, warmed up and timed side by side.
 
-    Every preset first trains two untimed steps (allocator, thread pool and autograd warm-up).
-    Then ``rounds`` rounds each time ``steps`` steps of every preset in turn (``steps // 10``,
-    at least 1, for the paper preset), so machine load that changes during the run falls on all
-    presets alike; the rate is the total rays over the total seconds of each preset.
+    Every preset first trains its :func:`warm_up_steps` untimed (allocator, thread pool,
+    autograd and, for the CPU presets, a pruned occupancy grid). Then ``rounds`` rounds each
+    time ``steps`` steps of every preset in turn (``steps // 10``, at least 1, for the paper
+    preset), so machine load that changes during the run falls on all presets alike; the rate
+    is the total rays over the total seconds of each preset.
     """
     trainers = {name: speed_trainer(data, name) for name in SPEED_BATCH_PIXELS}
     for trainer in trainers.values():
-        timed_steps(trainer, 2)
+        timed_steps(trainer, warm_up_steps(trainer))
     totals = {name: [0, 0.0] for name in trainers}
     for _ in range(rounds):
         for name, trainer in trainers.items():

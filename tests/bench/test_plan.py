@@ -47,9 +47,10 @@ def test_full_plan_ladders_and_totals():
         (ladder.session, ladder.preset, ladder.variant): ladder.budgets_s for ladder in plan.ladders
     }
     ladder = (60.0, 180.0, 600.0)
-    # Every preset's full variant climbs 1, 3 and 10 minutes.
-    for preset in PRESETS:
+    # Every fitted preset's full variant climbs 1, 3 and 10 minutes; paper is timed only.
+    for preset in ("fast", "balanced"):
         assert by_run.pop(("room", preset, "full")) == ladder
+    assert not any(key[1] == "paper" for key in by_run)
     # The fast preset's 9 other supported variants run once at the 3-minute table budget.
     others = {key: budgets for key, budgets in by_run.items() if key[0] == "room"}
     assert set(others) == {
@@ -62,20 +63,18 @@ def test_full_plan_ladders_and_totals():
     assert {key[1:] for key in table4} == {("fast", "full")}
     assert set(table4.values()) == {(180.0,)}
     assert len(plan.sessions) == 6
-    # 3 x 10 min + 9 x 3 min + 5 x 3 min = 72 min in 3 x 3 + 9 + 5 = 23 rungs.
-    assert planned_training_s(plan) == 72 * 60.0
-    assert planned_rungs(plan) == 23
+    # 2 x 10 min + 9 x 3 min + 5 x 3 min = 62 min in 2 x 3 + 9 + 5 = 20 rungs.
+    assert planned_training_s(plan) == 62 * 60.0
+    assert planned_rungs(plan) == 20
     assert "presets other than fast run only the full variant" in plan.notes
-    assert any(
-        note.startswith("the paper preset's full variant is fitted: one fit") for note in plan.notes
-    )
+    assert any(note.startswith("the paper preset is not fitted: one fit") for note in plan.notes)
 
 
 def test_full_plan_without_table4():
     plan = make_plan(False, PRESETS, VARIANTS, table4=False)
     assert "Table 4 sessions not made" in plan.notes
     assert [s.key for s in plan.sessions] == ["room"]
-    assert planned_training_s(plan) == (72 - 15) * 60.0 and planned_rungs(plan) == 18
+    assert planned_training_s(plan) == (62 - 15) * 60.0 and planned_rungs(plan) == 15
 
 
 def test_quick_plan_totals():
@@ -88,7 +87,7 @@ def test_quick_plan_totals():
 def test_overridden_budgets_put_the_table_budget_on_the_table_presets_ladder():
     plan = make_plan(
         False,
-        ("fast", "paper"),
+        ("fast", "balanced"),
         ("full", "base"),
         budgets_s=(900.0, 1200.0),
         table_budget_s=600.0,
@@ -97,7 +96,7 @@ def test_overridden_budgets_put_the_table_budget_on_the_table_presets_ladder():
     assert [(ladder.preset, ladder.variant, ladder.budgets_s) for ladder in plan.ladders] == [
         ("fast", "full", (600.0, 900.0, 1200.0)),
         ("fast", "base", (600.0,)),
-        ("paper", "full", (900.0, 1200.0)),
+        ("balanced", "full", (900.0, 1200.0)),
     ]
 
 

@@ -197,8 +197,9 @@ def _speed_lines(speed: SpeedProbe | None) -> list[str]:
     memory = fmt(speed.usage.peak_rss_mb if speed.usage else None, 0)
     return [
         "Each preset trained a few steps on the main session's data in one process "
-        "(`tools/bench_fit.py`'s `speed_table`: every preset first trains two untimed "
-        "warm-up steps, then the presets take turns over three timed rounds; no CRF warm "
+        "(`tools/bench_fit.py`'s `speed_table`: every preset first trains untimed warm-up "
+        "steps, the CPU presets through two occupancy-grid refreshes as a fit does in its "
+        "first seconds, then the presets take turns over three timed rounds; no CRF warm "
         "start, no held-out pixels, no renders; the paper preset with a smaller batch and a "
         f"tenth of the steps); that process peaked at {memory} MB.",
         "",

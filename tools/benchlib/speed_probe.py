@@ -3,8 +3,8 @@
     python -m benchlib.speed_probe --session DIR [--bins 4] [--steps 10]
 
 Prints one JSON line ``{"rays_per_s": {"fast": ..., "balanced": ..., "paper": ...,
-"fast_over_paper": ...}}`` from ``tools/bench_fit.py``'s ``speed_table``: two untimed warm-up
-steps per preset, then timed rounds in turn on the same data, without CRF warm start or renders.
+"fast_over_paper": ...}}`` from ``tools/bench_fit.py``'s ``speed_table``: untimed warm-up steps
+per preset, then timed rounds in turn on the same data, without CRF warm start or renders.
 """
 
 from __future__ import annotations
