@@ -30,8 +30,14 @@ __all__ = [
     "empty_triggers",
 ]
 
-EVENT_DTYPE = np.dtype([("t", np.int64), ("x", np.uint16), ("y", np.uint16), ("p", np.int8)])
-"""One DVS event: time in µs, column, row (top-left origin), polarity +1 / -1."""
+EVENT_DTYPE = np.dtype([("t", "<i8"), ("x", "<u2"), ("y", "<u2"), ("p", "i1")], align=True)
+"""One DVS event: time in µs, column, row (top-left origin), polarity +1 / -1.
+
+The aligned 16-byte layout (three padding bytes after ``p``) is that of AEDAT 4.0's event
+struct, so AEDAT 4.0 events are used in place, not copied; numpy keeps an aligned struct
+aligned when it joins arrays. The padding bytes are undefined: compare events field by field
+(``np.array_equal``), never by their bytes.
+"""
 
 IMU_DTYPE = np.dtype(
     [

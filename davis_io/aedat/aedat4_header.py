@@ -9,6 +9,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import lz4.frame
+import numpy as np
 import zstandard
 
 from davis_io.aedat.aedat4_streams import STREAM_TYPES
@@ -101,12 +102,12 @@ def decompress(compression: Compression, data: bytes) -> bytes:
     return data
 
 
-def packet_decompressor(compression: Compression) -> Callable[[bytes], bytes | memoryview]:
+def packet_decompressor(compression: Compression) -> Callable[[bytes], bytes | np.ndarray]:
     """A :func:`decompress` for one reader's packets, decoded one after the other.
 
-    For LZ4 the result may be a view into a buffer that the next call overwrites (see
-    :class:`~davis_io.aedat.lz4_frame.FrameDecompressor`): decode it before decompressing the
-    next packet, and copy what must outlive it.
+    For LZ4 each result is a new writable uint8 array (see
+    :class:`~davis_io.aedat.lz4_frame.FrameDecompressor`) whose bytes the decoded records may
+    keep as views; other compressions give bytes.
     """
     if compression in (Compression.LZ4, Compression.LZ4_HIGH):
         return FrameDecompressor().decompress
@@ -229,13 +230,13 @@ def parse_data_table(buf: bytes) -> list[DataTableEntry]:
     Raises:
         FlatBufferError: malformed buffer.
     """
-    entries = []
-    for table in root_table(buf, b"FTAB").tables(0):
-        info = table.struct_at(1, "<ii") or (0, 0)
-        entries.append(DataTableEntry(
-            int(table.scalar(0, "<q", 0)), info[0], info[1], int(table.scalar(2, "<q", 0)),
-            int(table.scalar(3, "<q", 0)), int(table.scalar(4, "<q", 0))))
-    return entries
+    columns = root_table(buf, b"FTAB").table_columns(0, _DATA_TABLE_COLUMNS)
+    return [DataTableEntry(*row) for row in zip(*(c.tolist() for c in columns), strict=True)]
+
+
+_DATA_TABLE_COLUMNS = [(0, 0, "<i8"), (1, 0, "<i4"), (1, 4, "<i4"), (2, 0, "<i8"), (3, 0, "<i8"),
+                       (4, 0, "<i8")]
+"""FileDataTable row fields in :class:`DataTableEntry` order: (slot, offset in field, dtype)."""
 
 
 def build_data_table(entries: list[DataTableEntry]) -> bytes:

@@ -42,8 +42,8 @@ class Aedat4Reader(FileReader):
 
     The header is read on construction (so ``info`` is known at once); iteration walks the
     packets from the start each time, reading one packet at a time. Each packet is
-    decompressed into a buffer reused for the next one (see :func:`packet_decompressor`) and
-    decoded into arrays of its own before the next is read.
+    decompressed into a new buffer (see :func:`packet_decompressor`) that its events keep as
+    their memory; frames, IMU samples and triggers are copied out of it.
 
     Attributes:
         info: camera, resolution and file facts (``extra``: format, compression, streams).

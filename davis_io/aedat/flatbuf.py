@@ -10,6 +10,8 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
+import numpy as np
+
 from davis_io.errors import FormatError
 
 __all__ = [
@@ -102,6 +104,40 @@ class FlatTable:
             for i in range(count)
         ]
 
+    def table_columns(
+        self, slot: int, columns: list[tuple[int, int, str]]
+    ) -> list[np.ndarray]:
+        """Read fields of every table in a vector of tables at once, one array per column.
+
+        Args:
+            slot: the vector-of-tables field.
+            columns: ``(field slot, byte offset inside the field, numpy dtype)`` per column,
+                e.g. ``(1, 4, "<i4")`` for the second int of an inline struct; a table without
+                the field reads 0.
+
+        Raises:
+            FlatBufferError: a table, vtable or field lies outside the buffer.
+        """
+        start, count = self.vector(slot, 4)
+        data = np.frombuffer(self.buf, np.uint8)
+        slots = start + 4 * np.arange(count, dtype=np.int64)
+        tables = slots + _gather(data, slots, "<u4", "table offset")
+        vtables = tables - _gather(data, tables, "<i4", "table")
+        vtable_sizes = _gather(data, vtables, "<u2", "vtable")
+        out = []
+        for field, offset, dtype in columns:
+            entry = 4 + 2 * field
+            present = entry + 2 <= vtable_sizes
+            field_offsets = np.zeros(count, np.int64)
+            field_offsets[present] = _gather(data, vtables[present] + entry, "<u2", "vtable")
+            present &= field_offsets != 0
+            column = np.zeros(count, dtype)
+            column[present] = _gather(
+                data, tables[present] + field_offsets[present] + offset, dtype, f"field {field}"
+            )
+            out.append(column)
+        return out
+
     def _target(self, slot: int) -> int | None:
         pos = self.field_pos(slot)
         if pos is None:
@@ -131,6 +167,16 @@ def _check(buf: bytes, pos: int, size: int, what: str) -> None:
             f"{what} at buffer position {pos} (+{size} bytes) lies outside the {len(buf)}-byte "
             "buffer; the packet is corrupt"
         )
+
+
+def _gather(data: np.ndarray, positions: np.ndarray, dtype: str, what: str) -> np.ndarray:
+    """The little-endian values of ``dtype`` at each of ``positions`` (bytes of ``data``)."""
+    size = np.dtype(dtype).itemsize
+    if len(positions) and (positions.min() < 0 or positions.max() + size > len(data)):
+        bad = int(positions[(positions < 0) | (positions + size > len(data))][0])
+        _check(data, bad, size, what)
+    picked = data[positions[:, None] + np.arange(size)]
+    return picked.view(dtype).reshape(len(positions)).astype(np.int64)
 
 
 def _read(buf: bytes, codec: struct.Struct, pos: int, what: str) -> int:

@@ -13,16 +13,16 @@ An AEDAT 4.0 packet payload is one LZ4 frame (LZ4 Frame Format Description, vers
 * a 4-byte content checksum if flagged.
 
 The frames DV and our writer produce (linked 64 KiB blocks, no checksums, no content size) are
-decoded here with ``lz4.block``: each compressed block is one LZ4 block whose matches may reach
-up to 64 KiB back into the output of the blocks before it (linked mode), so that tail is passed
-as the block's dictionary; an uncompressed block is copied as it is. ``lz4.frame.decompress``
-allocates a decompression context and an output buffer on every call, large enough that the C
-allocator maps fresh pages for them each time: on DV's packet-sized frames (about 150 kB of
-output in two or three blocks) that measured about 90 page faults per frame and 0.9 GB/s of
-output, against 2.1 GB/s for the blocks decoded here into one reused buffer
-(:class:`FrameDecompressor`; python-lz4 4.4).
+laid out here, which bounds their output by the block count, and decoded into a new array of
+that size: by the system's liblz4 in one call when it has one (:mod:`davis_io.aedat.liblz4`),
+otherwise block by block with ``lz4.block``, each compressed block being one LZ4 block whose
+matches may reach up to 64 KiB back into the output of the blocks before it (linked mode), so
+that tail is passed as the block's dictionary, and an uncompressed block copied as it is. Either
+way the caller owns the array: an AEDAT 4.0 reader hands out its events as a view of it, with no
+copy (``lz4.frame.decompress`` would allocate a context and bytes of its own for every frame,
+and the events would still have to be copied out of them).
 
-Frames this module does not decode itself go to ``lz4.frame.decompress`` unchanged, so they are
+Frames this module does not lay out go to ``lz4.frame.decompress`` unchanged, so they are
 decoded, or rejected with its error, exactly as before: checksummed blocks or content (their
 XXH32 over the whole data is not available without ``lz4.frame``), a dictionary id, reserved or
 unknown bits, a header checksum mismatch, a block size beyond the maximum or the data, a missing
@@ -37,6 +37,9 @@ from typing import NamedTuple
 
 import lz4.block
 import lz4.frame
+import numpy as np
+
+from davis_io.aedat.liblz4 import NativeFrameDecoder, system_liblz4
 
 __all__ = [
     "FrameDecompressor",
@@ -69,28 +72,40 @@ class FrameLayout(NamedTuple):
     content_size: int | None
     blocks: list[tuple[int, int, bool]]
 
+    @property
+    def capacity(self) -> int:
+        """Most bytes the blocks can hold: a compressed block at most ``block_max``."""
+        return sum(self.block_max if compressed else size for _, size, compressed in self.blocks)
+
 
 class FrameDecompressor:
-    """Decompresses LZ4 frames into one output buffer that it reuses from call to call.
+    """Decompresses LZ4 frames, each into a new writable array that the caller keeps.
 
-    A reader that decodes each packet before reading the next needs each output only briefly.
-    Writing every frame into the same buffer avoids allocating and freeing some 150 kB per
-    packet, which the C allocator otherwise returns to the system and faults in again: reading
-    5 M events (560 packets) measured about 14,500 page faults and 95 ms with a new buffer per
-    packet, 140 faults and 70 ms with this one. Linked blocks find their dictionary, the
-    previous 64 KiB of output, right before them in the buffer.
+    Uses the system's liblz4 when there is one (``native=None`` or ``True``), else python-lz4.
     """
 
-    def __init__(self) -> None:
-        """Start with an empty buffer; it grows to the largest frame seen."""
-        self._buffer = bytearray()
+    def __init__(self, native: bool | None = None):
+        """Pick the decoder.
 
-    def decompress(self, data: bytes) -> bytes | memoryview:
-        """Decompress one complete LZ4 frame.
+        Args:
+            native: True to require liblz4, False to use python-lz4, None for liblz4 when the
+                system has it.
 
-        Returns:
-            A view into the reused buffer, valid until the next call (copy what must outlive
-            it), or new bytes from ``lz4.frame`` for the frames it decodes.
+        Raises:
+            RuntimeError: ``native`` is True and the system has no usable liblz4.
+        """
+        lib = system_liblz4() if native is not False else None
+        if native and lib is None:
+            raise RuntimeError("no usable liblz4 (1.8 or later) on this system")
+        self._native = NativeFrameDecoder(lib) if lib is not None else None
+
+    @property
+    def native(self) -> bool:
+        """True when frames are decoded by the system's liblz4."""
+        return self._native is not None
+
+    def decompress(self, data: bytes) -> np.ndarray:
+        """Decompress one complete LZ4 frame into a new uint8 array.
 
         Raises:
             RuntimeError: ``lz4.frame`` rejects a frame it decodes (see the module docstring).
@@ -99,33 +114,38 @@ class FrameDecompressor:
         """
         layout = frame_layout(data)
         if layout is None:
-            return lz4.frame.decompress(data)
-        capacity = sum(layout.block_max if packed else size for _, size, packed in layout.blocks)
-        if len(self._buffer) < capacity:  # a new buffer: views handed out before stay valid
-            self._buffer = bytearray(capacity)
-        view, out, pos = memoryview(data), memoryview(self._buffer), 0
-        for start, size, compressed in layout.blocks:
-            block = view[start : start + size]
-            if compressed:
-                window = out[max(0, pos - WINDOW) : pos] if layout.linked else b""
-                try:
-                    block = lz4.block.decompress(
-                        block, uncompressed_size=layout.block_max, dict=window
-                    )
-                except lz4.block.LZ4BlockError as error:
-                    raise ValueError(
-                        f"LZ4 block at frame byte {start - 4} is corrupt ({error})"
-                    ) from None
-            out[pos : pos + len(block)] = block
-            pos += len(block)
-        if layout.content_size is not None and pos != layout.content_size:
-            raise ValueError(f"LZ4 frame holds {pos} bytes, its header says {layout.content_size}")
-        return out[:pos]
+            return np.frombuffer(bytearray(lz4.frame.decompress(data)), np.uint8)
+        out = np.empty(layout.capacity, np.uint8)
+        if self._native is not None:
+            size = self._native.decode_into(bytes(data), out)
+        else:
+            size = _decode_blocks(data, layout, out)
+        if layout.content_size is not None and size != layout.content_size:
+            raise ValueError(f"LZ4 frame holds {size} bytes, its header says {layout.content_size}")
+        return out[:size]
+
+
+def _decode_blocks(data: bytes, layout: FrameLayout, out: np.ndarray) -> int:
+    """Decode the frame's blocks one by one with python-lz4; return the bytes written."""
+    view, written, pos = memoryview(data), memoryview(out), 0
+    for start, size, compressed in layout.blocks:
+        block = view[start : start + size]
+        if compressed:
+            window = written[max(0, pos - WINDOW) : pos] if layout.linked else b""
+            try:
+                block = lz4.block.decompress(block, uncompressed_size=layout.block_max, dict=window)
+            except lz4.block.LZ4BlockError as error:
+                raise ValueError(
+                    f"LZ4 block at frame byte {start - 4} is corrupt ({error})"
+                ) from None
+        written[pos : pos + len(block)] = block
+        pos += len(block)
+    return pos
 
 
 def decompress_frame(data: bytes) -> bytes:
     """Decompress one complete LZ4 frame into new bytes (errors as in FrameDecompressor)."""
-    return bytes(FrameDecompressor().decompress(data))
+    return FrameDecompressor().decompress(data).tobytes()
 
 
 def frame_layout(data: bytes) -> FrameLayout | None:

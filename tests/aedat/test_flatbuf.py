@@ -78,9 +78,9 @@ def test_vector_longer_than_the_buffer_is_an_error():
         root_table(bytes(data), b"ABCD").vector(0, 1)
 
 
-def test_event_dtype_is_the_prefix_of_the_file_event_struct():
-    # decode_events copies the first 13 bytes of each 16-byte struct straight into EVENT_DTYPE
-    assert EVENT_DTYPE.itemsize == 13 and RAW_EVENT_DTYPE.itemsize == 16
+def test_event_dtype_has_the_layout_of_the_file_event_struct():
+    # decode_events views the file's 16-byte structs as EVENT_DTYPE in place
+    assert EVENT_DTYPE.itemsize == RAW_EVENT_DTYPE.itemsize == 16
     for name in EVENT_DTYPE.names:
         assert EVENT_DTYPE.fields[name][1] == RAW_EVENT_DTYPE.fields[name][1]
         assert EVENT_DTYPE.fields[name][0].itemsize == RAW_EVENT_DTYPE.fields[name][0].itemsize

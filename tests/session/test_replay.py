@@ -9,6 +9,7 @@ from davis_io.aedat import open_recording
 from davis_io.bins import bin_exposure
 from davis_io.session import Session
 from davis_io.session.recorder import record
+from davis_io.types import EVENT_DTYPE
 
 dv = pytest.importorskip("dv_processing")
 
@@ -65,7 +66,7 @@ def test_window_event_counts_match_dv_processing(replayed):
 
 def test_bins_of_a_fixture_frame_match_dv_events(replayed):
     folder, _, events, windows, _ = replayed
-    ours = np.zeros(len(events), dtype=[("t", "<i8"), ("x", "<u2"), ("y", "<u2"), ("p", "i1")])
+    ours = np.zeros(len(events), dtype=EVENT_DTYPE)
     ours["t"], ours["x"], ours["y"] = events["timestamp"], events["x"], events["y"]
     ours["p"] = np.where(events["polarity"] > 0, 1, -1)
     start, end = windows[1]
