@@ -4,15 +4,17 @@ One command regenerates every number of the report:
 
     python tools/bench.py [--quick] [--out bench-out] [--poses auto|estimated|truth]
                           [--presets fast ...] [--variants full ...] [--budgets 60 180 ...]
-                          [--table-budget S] [--table4 | --no-table4] [--no-capture] [--fresh]
+                          [--table-budget S] [--table4 | --no-table4] [--scenes | --no-scenes]
+                          [--no-capture] [--fresh]
 
-1. Sessions: the ``room`` benchmark of ``make_benchmark.py`` and the Table 4 sessions (input
-   exposure x1/16, x1, x16 of 0.016 s at a fixed gain; DVS noise x1, x2, x4), recorded once under
-   ``OUT/sessions/`` with their poses and reused by later runs.
+1. Sessions: the ``room`` benchmark of ``make_benchmark.py``, the Table 4 sessions (input
+   exposure x1/16, x1, x16 of 0.016 s at a fixed gain; DVS noise x1, x2, x4) and the other four
+   ``make_benchmark.py`` scenes, recorded once under ``OUT/sessions/`` with their poses and
+   reused by later runs.
 2. Runs: each preset x variant, each in its own ``seecap fit`` process per budget (a ladder of
-   budgets resumes one run), scored on the held-out views against the emulator's truth. The
-   full plan is 62 minutes of training, about 100 minutes in all on a 2-core machine
-   (``benchlib/plan.py``).
+   budgets resumes one run), scored on the held-out views against the emulator's truth; on
+   every scene, ``full`` beside ``oracle`` at the top budget. The full plan is 149 minutes of
+   training, about three and a half hours in all on a 2-core machine (``benchlib/plan.py``).
 3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here.
 4. Capture side: ``bench_decode.py``, ``bench_usb.py`` and ``bench_record.py``.
 
@@ -86,6 +88,13 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
         default=None,
         help="make and fit the Table 4 sessions (default: not with --quick)",
     )
+    parser.add_argument(
+        "--scenes",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="make the other benchmark scenes and fit full and oracle on each "
+        "(default: not with --quick)",
+    )
     parser.add_argument("--no-capture", action="store_true", help="skip capture throughput")
     parser.add_argument(
         "--fresh",
@@ -158,6 +167,7 @@ def main(argv: list[str] | None = None, command: str | None = None) -> int:
         tuple(args.budgets),
         args.table_budget,
         table4=args.table4,
+        scenes=args.scenes,
     )
     out = args.out.resolve()  # children run in other folders
     out.mkdir(parents=True, exist_ok=True)

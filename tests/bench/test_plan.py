@@ -1,4 +1,10 @@
-from benchlib.plan import TABLE4_ROWS, make_plan, planned_rungs, planned_training_s
+from benchlib.plan import (
+    SCENE_SESSIONS,
+    TABLE4_ROWS,
+    make_plan,
+    planned_rungs,
+    planned_training_s,
+)
 
 PRESETS = ("paper", "fast", "balanced")
 VARIANTS = (
@@ -51,30 +57,41 @@ def test_full_plan_ladders_and_totals():
     for preset in ("fast", "balanced"):
         assert by_run.pop(("room", preset, "full")) == ladder
     assert not any(key[1] == "paper" for key in by_run)
-    # The fast preset's 9 other supported variants run once at the 3-minute table budget.
+    # The oracle is read at the table budget and again beside full at 10 minutes.
+    assert by_run.pop(("room", "fast", "oracle")) == (180.0, 600.0)
+    # The fast preset's 8 other supported variants run once at the 3-minute table budget.
     others = {key: budgets for key, budgets in by_run.items() if key[0] == "room"}
     assert set(others) == {
-        ("room", "fast", v) for v in VARIANTS if v not in ("full", "multi-exposure")
+        ("room", "fast", v) for v in VARIANTS if v not in ("full", "multi-exposure", "oracle")
     }
     assert set(others.values()) == {(180.0,)}
     # Table 4: five sessions, the fast preset's full variant at the table budget.
-    table4 = {key: budgets for key, budgets in by_run.items() if key[0] != "room"}
+    table4 = {key: budgets for key, budgets in by_run.items() if key[0] in TABLE4_ROWS.values()}
     assert {key[0] for key in table4} == set(TABLE4_ROWS.values())
     assert {key[1:] for key in table4} == {("fast", "full")}
     assert set(table4.values()) == {(180.0,)}
-    assert len(plan.sessions) == 6
-    # 2 x 10 min + 9 x 3 min + 5 x 3 min = 62 min in 2 x 3 + 9 + 5 = 20 rungs.
-    assert planned_training_s(plan) == 62 * 60.0
-    assert planned_rungs(plan) == 20
+    # The four other scenes: full and oracle for 10 minutes each.
+    scenes = {key: budgets for key, budgets in by_run.items() if key not in others | table4}
+    assert set(scenes) == {
+        (spec.key, "fast", v) for spec in SCENE_SESSIONS for v in ("full", "oracle")
+    }
+    assert set(scenes.values()) == {(600.0,)}
+    assert [s.key for s in plan.sessions[-4:]] == ["lamp", "corridor", "room-mono", "lamp-film"]
+    assert len(plan.sessions) == 10
+    # 2 x 10 min + 9 x 3 min + 7 min (oracle on) + 5 x 3 min + 8 x 10 min = 149 min
+    # in 2 x 3 + 9 + 1 + 5 + 8 = 29 rungs.
+    assert planned_training_s(plan) == 149 * 60.0
+    assert planned_rungs(plan) == 29
     assert "presets other than fast run only the full variant" in plan.notes
     assert any(note.startswith("the paper preset is not fitted: one fit") for note in plan.notes)
 
 
-def test_full_plan_without_table4():
-    plan = make_plan(False, PRESETS, VARIANTS, table4=False)
+def test_full_plan_without_table4_or_scenes():
+    plan = make_plan(False, PRESETS, VARIANTS, table4=False, scenes=False)
     assert "Table 4 sessions not made" in plan.notes
+    assert "the other benchmark scenes not made" in plan.notes
     assert [s.key for s in plan.sessions] == ["room"]
-    assert planned_training_s(plan) == (62 - 15) * 60.0 and planned_rungs(plan) == 15
+    assert planned_training_s(plan) == (149 - 15 - 80) * 60.0 and planned_rungs(plan) == 16
 
 
 def test_quick_plan_totals():
@@ -92,6 +109,7 @@ def test_overridden_budgets_put_the_table_budget_on_the_table_presets_ladder():
         budgets_s=(900.0, 1200.0),
         table_budget_s=600.0,
         table4=False,
+        scenes=False,
     )
     assert [(ladder.preset, ladder.variant, ladder.budgets_s) for ladder in plan.ladders] == [
         ("fast", "full", (600.0, 900.0, 1200.0)),

@@ -1,11 +1,13 @@
 """What one benchmark run measures: the sessions, and every preset x variant budget ladder.
 
-The full plan is sized to about 100 minutes of wall time on a 2-core machine: 62 minutes of
-training (the table preset's ``full`` up 1, 3 and 10 minutes, its nine other variants at the
-3-minute table budget, ``balanced`` ``full`` up the ladder, Table 4's five sessions at the table
-budget) in 20 rungs, each adding about a minute of start-up, rendering and scoring on an idle
-machine, plus making the six sessions and the capture-side tools. The ``paper`` preset is
-measured for speed only (:data:`FULL_UNFITTED_PRESETS`).
+The full plan is sized to about three and a half hours of wall time on a 2-core machine:
+149 minutes of training (the table preset's ``full`` up 1, 3 and 10 minutes, its nine other
+variants at the 3-minute table budget, its ``oracle`` on to 10 minutes, ``balanced`` ``full`` up
+the ladder, ``full`` and ``oracle`` for 10 minutes on each of the four other benchmark scenes,
+Table 4's five sessions at the table budget) in 29 rungs, each adding about a minute of
+start-up, rendering and scoring on an idle machine, plus making the ten sessions and the
+capture-side tools. The ``paper`` preset is measured for speed only
+(:data:`FULL_UNFITTED_PRESETS`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ __all__ = [
     "Ladder",
     "Plan",
     "SessionSpec",
+    "SCENE_SESSIONS",
     "TABLE4_ROWS",
     "make_plan",
     "planned_rungs",
@@ -136,6 +139,20 @@ class Plan:
 
 MAIN_SESSION = SessionSpec("room", maker="benchmark")
 
+SCENE_SESSIONS = tuple(
+    SessionSpec(key, scene=scene, seed=seed, maker="benchmark")
+    for key, scene, seed in (
+        ("lamp", "lamp", 2),
+        ("corridor", "corridor", 3),
+        ("room-mono", "room", 4),
+        ("lamp-film", "lamp", 5),
+    )
+)
+"""The other ``make_benchmark.py`` scenes (their seeds are that tool's), each fitted with the
+table preset's ``full`` and ``oracle`` at the top budget: the trainer's targets per scene."""
+
+SCENE_VARIANTS = ("full", "oracle")
+
 TABLE4_SESSIONS = (
     SessionSpec(
         "t4-exposure-1_16",
@@ -181,12 +198,14 @@ def _grid(
     budgets: tuple[float, ...],
     table_budget_s: float,
     table_preset: str,
+    oracle_at_top: bool,
 ) -> list[Ladder]:
     """The main session's ladders: ``full`` of every preset climbs every budget (the table
     preset's also stops at the table budget, so the comparisons read every variant at the same
     budget); the table preset's other variants run once, at the table budget; other presets
-    run only ``full``. The table preset comes first and ``paper`` (the slowest) last, so an
-    interrupted run has the comparisons before the costliest rungs."""
+    run only ``full``; with ``oracle_at_top`` the table preset's ``oracle`` goes on to the top
+    budget, to stand beside ``full`` there. The table preset comes first and ``paper`` (the
+    slowest) last, so an interrupted run has the comparisons before the costliest rungs."""
     ladders = []
     order = sorted(presets, key=lambda p: (p != table_preset, p == "paper"))
     for preset in order:
@@ -197,7 +216,10 @@ def _grid(
                 )
                 ladders.append(Ladder(MAIN_SESSION.key, preset, variant, rungs))
             elif preset == table_preset:
-                ladders.append(Ladder(MAIN_SESSION.key, preset, variant, (table_budget_s,)))
+                rungs = (table_budget_s,)
+                if oracle_at_top and variant == "oracle" and budgets[-1] > table_budget_s:
+                    rungs += (budgets[-1],)  # beside full at the top budget
+                ladders.append(Ladder(MAIN_SESSION.key, preset, variant, rungs))
     return ladders
 
 
@@ -219,6 +241,7 @@ def make_plan(
     table_budget_s: float = 0.0,
     table_preset: str = "fast",
     table4: bool | None = None,
+    scenes: bool | None = None,
 ) -> Plan:
     """The plan of one invocation.
 
@@ -228,8 +251,10 @@ def make_plan(
             Without it, 16 + 8 views; the table preset's ``full`` climbs the ladder and its
             other variants (Tables 3 and 9) run at the table budget; every other preset runs
             only ``full``, up the ladder; each Table 4 session runs ``full`` at the table
-            budget; presets of :data:`FULL_UNFITTED_PRESETS` are not fitted. With the defaults
-            that is 62 minutes of training in 20 rungs.
+            budget; each of :data:`SCENE_SESSIONS` runs :data:`SCENE_VARIANTS` at the top
+            budget, and so does the main session's ``oracle``; presets of
+            :data:`FULL_UNFITTED_PRESETS` are not fitted. With the defaults that is 149
+            minutes of training in 29 rungs.
         presets: every preset to run.
         variants: every variant to run (unsupported ones are left out with a note).
         budgets_s: the budget ladder, s (default: :data:`QUICK_BUDGETS_S` or
@@ -238,6 +263,8 @@ def make_plan(
             :data:`FULL_TABLE_BUDGET_S`).
         table_preset: preset of the comparisons.
         table4: also make the Table 4 sessions and fit them (None: only without ``quick``).
+        scenes: also make :data:`SCENE_SESSIONS` and fit :data:`SCENE_VARIANTS` of the table
+            preset on each at the top budget (None: only without ``quick``).
     """
     budgets = tuple(sorted(budgets_s or (QUICK_BUDGETS_S if quick else FULL_BUDGETS_S)))
     table_budget = table_budget_s or (budgets[0] if quick else FULL_TABLE_BUDGET_S)
@@ -256,6 +283,7 @@ def make_plan(
             budgets,
             table_budget,
             table_preset,
+            oracle_at_top=False,
         )
         others = [
             Ladder(MAIN_SESSION.key, p, "full", (budgets[0],))
@@ -274,7 +302,7 @@ def make_plan(
             notes.append(f"quick mode leaves out {', '.join(dropped)} (run without --quick)")
     else:
         fitted = tuple(p for p in presets if p not in FULL_UNFITTED_PRESETS)
-        ladders = _grid(fitted, variants, budgets, table_budget, table_preset)
+        ladders = _grid(fitted, variants, budgets, table_budget, table_preset, oracle_at_top=True)
         if any(p != table_preset for p in fitted) and any(v != "full" for v in variants):
             notes.append(f"presets other than {table_preset} run only the full variant")
         notes += [
@@ -290,6 +318,18 @@ def make_plan(
     else:
         sessions += TABLE4_SESSIONS
         ladders += [Ladder(s.key, table_preset, "full", (table_budget,)) for s in TABLE4_SESSIONS]
+    if scenes is None:
+        scenes = not quick
+    if not scenes:
+        notes.append("the other benchmark scenes not made" + (" in quick mode" if quick else ""))
+    elif table_preset in presets and any(v in variants for v in SCENE_VARIANTS):
+        sessions += SCENE_SESSIONS
+        ladders += [
+            Ladder(spec.key, table_preset, variant, (budgets[-1],))
+            for spec in SCENE_SESSIONS
+            for variant in SCENE_VARIANTS
+            if variant in variants
+        ]
     return Plan(
         quick,
         (4, 2) if quick else (16, 8),

@@ -24,6 +24,7 @@ __all__ = [
     "comparison_rows",
     "judge_all",
     "render_markdown",
+    "scene_rows",
     "target_checks",
     "write_json",
 ]
@@ -107,11 +108,19 @@ def target_checks(report: BenchReport) -> list[list[str]]:
                 None if value is None else value >= target,
             )
         )
+    fast = _at(report.rows, main, "fast", "full", 600.0)
+    oracle = _at(report.rows, main, "fast", "oracle", 600.0)
+    if fast and oracle and fast.budget_s == oracle.budget_s:
+        rows["oracle"], full = oracle, fast  # the oracle beside full at the top budget
     value = gap(rows["oracle"], full)
     checks.append(
-        _check("oracle − full, HDR PSNR dB", value, "<= 3", None if value is None else value <= 3)
+        _check(
+            f"oracle − full at {fmt(full.budget_s if full else None, 0)} s, HDR PSNR dB",
+            value,
+            "<= 3",
+            None if value is None else value <= 3,
+        )
     )
-    fast = _at(report.rows, main, "fast", "full", 600.0)
     for name, attribute in (("HDR PSNR", "hdr_psnr"), ("novel-exposure PSNR", "novel_psnr")):
         value = getattr(fast, attribute) if fast and fast.ok else None
         checks.append(
@@ -141,6 +150,62 @@ def target_checks(report: BenchReport) -> list[list[str]]:
         )
     )
     return checks
+
+
+def scene_rows(report: BenchReport) -> list[list[str]]:
+    """Per scene at the top budget: ``full`` and ``oracle``, their gap, and what it is made of.
+
+    The columns that explain the gap: the held-out score at the similarity-mapped true poses
+    (before registration: the cost of pose error), the learned response's distance from the
+    true one, and the session's pose errors.
+    """
+    plan = report.plan
+    top = max((b for ladder in plan.ladders for b in ladder.budgets_s), default=0.0)
+    outcomes = {s.spec.key: s for s in report.sessions}
+    body = []
+    for spec in plan.sessions:
+        full = _at(report.rows, spec.key, plan.table_preset, "full", top)
+        oracle = _at(report.rows, spec.key, plan.table_preset, "oracle", top)
+        if full is None or full.budget_s != top:
+            continue
+        oracle = oracle if oracle and oracle.budget_s == top and oracle.ok else None
+        ok = full.ok
+        outcome = outcomes.get(spec.key)
+        gap = oracle.hdr_psnr - full.hdr_psnr if oracle and ok else None
+        met = ok and full.hdr_psnr >= 30 and full.novel_psnr >= 30 and gap is not None and gap <= 3
+        body.append(
+            [
+                spec.key,
+                fmt(full.hdr_psnr if ok else None),
+                fmt(full.novel_psnr if ok else None),
+                fmt(oracle.hdr_psnr if oracle else None),
+                fmt(oracle.novel_psnr if oracle else None),
+                fmt(gap),
+                fmt(full.mapped_hdr_psnr if ok else None),
+                fmt(full.crf_rms if ok else None, 3),
+                fmt(outcome.rotation_error_deg if outcome else None),
+                fmt(outcome.centre_error if outcome else None, 3),
+                str(full.steps),
+                "met" if met else "**missed**" if ok else full.status,
+            ]
+        )
+    return body
+
+
+SCENE_HEADERS = [
+    "session",
+    "full HDR",
+    "full novel",
+    "oracle HDR",
+    "oracle novel",
+    "oracle − full HDR",
+    "full HDR at mapped poses",
+    "CRF RMS",
+    "rotation error °",
+    "centre error / extent",
+    "full steps",
+    "targets (≥ 30, ≥ 30, ≤ 3)",
+]
 
 
 def _session_lines(report: BenchReport) -> list[str]:
@@ -250,6 +315,17 @@ def render_markdown(report: BenchReport) -> str:
         runs_table(report.rows),
         "",
         f"![speed against error]({report.plot_name})",
+        "",
+        "### Every scene: full beside oracle",
+        "",
+        f"Preset {plan.table_preset} at the top budget, from the recording with its own poses; "
+        "PSNR in dB. `full HDR at mapped poses` scores the held-out views at the "
+        "similarity-mapped true poses before they are registered to the fit: the distance to "
+        "`full HDR` is what the reconstruction's pose error costs. The oracle is trained on "
+        "sharp linear HDR at the true poses, so `oracle − full` is what blur, clipping, the "
+        "sensor models and the poses leave on the table.",
+        "",
+        markdown_table(SCENE_HEADERS, scene_rows(report)),
         "",
         "### The paper's comparisons on our data",
         "",

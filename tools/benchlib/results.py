@@ -50,6 +50,10 @@ class RunRow:
         novel_ssim: LDR SSIM at the novel exposures.
         ldr_psnr: LDR PSNR per test exposure, ``[(exposure_s, dB), ...]`` shortest first.
         fit_psnr: best PSNR on held-out pixels of the blurry training frames, dB.
+        mapped_hdr_psnr: HDR PSNR at the held-out views' similarity-mapped true poses, before
+            they were registered to the fit, dB (NaN when not registered).
+        mapped_novel_psnr: novel-exposure PSNR likewise, dB.
+        crf_rms: the learned response's RMS difference from the true one, worst channel.
         last_terms: the loss terms of the last progress record.
         render_s_per_view: seconds to render one test view.
         process: the rung's child process cost.
@@ -73,6 +77,9 @@ class RunRow:
     novel_ssim: float = NAN
     ldr_psnr: list[tuple[float, float]] = field(default_factory=list)
     fit_psnr: float = NAN
+    mapped_hdr_psnr: float = NAN
+    mapped_novel_psnr: float = NAN
+    crf_rms: float = NAN
     last_terms: dict[str, float] = field(default_factory=dict)
     render_s_per_view: float = NAN
     process: ProcessUsage | None = None
@@ -118,6 +125,12 @@ def row_from_metrics(row: RunRow, metrics: dict) -> RunRow:
     row.hdr_unaligned_psnr = _score(metrics, "hdr_unaligned", "psnr")
     row.novel_psnr = _score(metrics, "novel_exposure", "psnr")
     row.novel_ssim = _score(metrics, "novel_exposure", "ssim")
+    mapped = metrics.get("test_poses", {}).get("at_mapped_poses", {})
+    row.mapped_hdr_psnr = _number(mapped.get("hdr_psnr"))
+    row.mapped_novel_psnr = _number(mapped.get("novel_exposure_psnr"))
+    crf = metrics.get("crf_error") or {}
+    channels = [v for v in crf.get("rms", []) if v is not None and not math.isnan(v)]
+    row.crf_rms = max(channels, default=NAN)
     ldr = metrics.get("ldr", {})
     row.ldr_psnr = sorted(
         (float(exposure), _number(score.get("psnr"))) for exposure, score in ldr.items()
