@@ -102,15 +102,17 @@ def decompress(compression: Compression, data: bytes) -> bytes:
     return data
 
 
-def packet_decompressor(compression: Compression) -> Callable[[bytes], bytes | np.ndarray]:
+def packet_decompressor(
+    compression: Compression, native_lz4: bool | None = None
+) -> Callable[[bytes], bytes | np.ndarray]:
     """A :func:`decompress` for one reader's packets, decoded one after the other.
 
     For LZ4 each result is a new writable uint8 array (see
-    :class:`~davis_io.aedat.lz4_frame.FrameDecompressor`) whose bytes the decoded records may
-    keep as views; other compressions give bytes.
+    :class:`~davis_io.aedat.lz4_frame.FrameDecompressor`, which ``native_lz4`` is passed to)
+    whose bytes the decoded records may keep as views; other compressions give bytes.
     """
     if compression in (Compression.LZ4, Compression.LZ4_HIGH):
-        return FrameDecompressor().decompress
+        return FrameDecompressor(native_lz4).decompress
     return functools.partial(decompress, compression)
 
 

@@ -51,13 +51,20 @@ class Aedat4Reader(FileReader):
         data_table: the FileDataTable rows, or None when the file has none.
     """
 
-    def __init__(self, path: str | Path):
+    def __init__(self, path: str | Path, native_lz4: bool | None = None):
         """Open ``path`` and read its header and data table.
+
+        Args:
+            path: the recording.
+            native_lz4: LZ4 packets through the system's liblz4 (True), python-lz4 (False),
+                or liblz4 when the system has it (None).
 
         Raises:
             FormatError: empty file, wrong magic, or a malformed header.
+            RuntimeError: ``native_lz4`` is True and the system has no usable liblz4.
         """
         super().__init__(path)
+        self._native_lz4 = native_lz4
         try:
             self._read_header()
         except BaseException:
@@ -159,7 +166,7 @@ class Aedat4Reader(FileReader):
         except FormatError as error:
             raise FormatError(f"bad IOHeader: {error}", path=path, offset=len(MAGIC)) from None
         self.compression = header.compression
-        self._decompress = packet_decompressor(self.compression)
+        self._decompress = packet_decompressor(self.compression, self._native_lz4)
         self._data_start = len(MAGIC) + 4 + length
         self._data_end, self._header_notes = file_size, []
         self.data_table: list[DataTableEntry] | None = None

@@ -240,3 +240,13 @@ def test_packets_read_earlier_keep_their_events(tmp_path, compression):
     assert [len(p.events) for p in read] == sizes
     for ours, written in zip(read, packets, strict=True):
         assert np.array_equal(ours.events, written.events)
+
+
+def test_the_reader_gives_the_same_events_with_python_lz4_only(aestream_aedat4):
+    def events(native):
+        with Aedat4Reader(aestream_aedat4, native_lz4=native) as reader:
+            return np.concatenate([p.events for p in reader if len(p.events)])
+
+    fallback = events(False)
+    assert len(fallback) == 117_667
+    assert np.array_equal(fallback, events(None))

@@ -13,14 +13,20 @@ def test_figures_of_the_decode_result_in_millions():
         "file_mb": 31.2,
         "repeats": 3,
         "ours_ev_s": 88.5e6,
+        "python_lz4_ev_s": 55.0e6,
         "dv_ev_s": 61.0e6,
         "ratio": 1.45,
+        "python_lz4_ratio": 0.9,
+        "liblz4": True,
         "command": "x",
         "machine": "y",
     }
     figures = figures_from(DECODE, result)
-    assert figures.keys() == {"events", "ours_mev_s", "dv_mev_s", "ratio"}
+    assert figures.keys() == {
+        "events", "ours_mev_s", "python_lz4_mev_s", "dv_mev_s", "ratio", "python_lz4_ratio"
+    }
     assert figures["events"] == 5012345.0 and figures["ratio"] == 1.45
+    assert math.isclose(figures["python_lz4_mev_s"], 55.0) and figures["python_lz4_ratio"] == 0.9
     assert math.isclose(figures["ours_mev_s"], 88.5) and math.isclose(figures["dv_mev_s"], 61.0)
 
 

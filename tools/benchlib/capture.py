@@ -58,9 +58,15 @@ CAPTURE_BENCHES = (
         {
             "events": Figure("events in the file", "events"),
             "ours_mev_s": Figure("ours, M events/s", "ours_ev_s", 1e-6),
+            "python_lz4_mev_s": Figure(
+                "ours with python-lz4 only, M events/s", "python_lz4_ev_s", 1e-6
+            ),
             "dv_mev_s": Figure("dv-processing, M events/s", "dv_ev_s", 1e-6),
             "ratio": Figure("ours / dv-processing", "ratio"),
+            "python_lz4_ratio": Figure("ours with python-lz4 only / dv-processing",
+                                       "python_lz4_ratio"),
         },
+        {"ratio": (">=", 1.0)},
     ),
     CaptureBench(
         "bench_usb.py",
