@@ -142,6 +142,7 @@ def run_fits(
                     ladder.preset,
                     ladder.variant,
                     ladder.budgets_s[0],
+                    seed=ladder.seed,
                     status="session not ready",
                 )
             )

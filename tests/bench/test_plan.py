@@ -49,8 +49,16 @@ def test_quick_plan_with_table4():
 def test_full_plan_ladders_and_totals():
     plan = make_plan(False, PRESETS, VARIANTS)
     assert plan.table_budget_s == 180.0 and plan.views == (16, 8)
+    # Two more seeds of the fast preset's full at the table budget measure the seed spread.
+    repeats = [ladder for ladder in plan.ladders if ladder.seed]
+    assert [(r.session, r.preset, r.variant, r.budgets_s, r.seed) for r in repeats] == [
+        ("room", "fast", "full", (180.0,), 1),
+        ("room", "fast", "full", (180.0,), 2),
+    ]
     by_run = {
-        (ladder.session, ladder.preset, ladder.variant): ladder.budgets_s for ladder in plan.ladders
+        (ladder.session, ladder.preset, ladder.variant): ladder.budgets_s
+        for ladder in plan.ladders
+        if not ladder.seed
     }
     ladder = (60.0, 180.0, 600.0)
     # Every fitted preset's full variant climbs 1, 3 and 10 minutes; paper is timed only.
@@ -78,10 +86,10 @@ def test_full_plan_ladders_and_totals():
     assert set(scenes.values()) == {(600.0,)}
     assert [s.key for s in plan.sessions[-4:]] == ["lamp", "corridor", "room-mono", "lamp-film"]
     assert len(plan.sessions) == 10
-    # 2 x 10 min + 9 x 3 min + 7 min (oracle on) + 5 x 3 min + 8 x 10 min = 149 min
-    # in 2 x 3 + 9 + 1 + 5 + 8 = 29 rungs.
-    assert planned_training_s(plan) == 149 * 60.0
-    assert planned_rungs(plan) == 29
+    # 2 x 10 min + 9 x 3 min + 7 min (oracle on) + 2 x 3 min (seeds) + 5 x 3 min + 8 x 10 min
+    # = 155 min in 2 x 3 + 9 + 1 + 2 + 5 + 8 = 31 rungs.
+    assert planned_training_s(plan) == 155 * 60.0
+    assert planned_rungs(plan) == 31
     assert "presets other than fast run only the full variant" in plan.notes
     assert any(note.startswith("the paper preset is not fitted: one fit") for note in plan.notes)
 
@@ -91,7 +99,7 @@ def test_full_plan_without_table4_or_scenes():
     assert "Table 4 sessions not made" in plan.notes
     assert "the other benchmark scenes not made" in plan.notes
     assert [s.key for s in plan.sessions] == ["room"]
-    assert planned_training_s(plan) == (149 - 15 - 80) * 60.0 and planned_rungs(plan) == 16
+    assert planned_training_s(plan) == (155 - 15 - 80) * 60.0 and planned_rungs(plan) == 18
 
 
 def test_quick_plan_totals():
@@ -111,10 +119,14 @@ def test_overridden_budgets_put_the_table_budget_on_the_table_presets_ladder():
         table4=False,
         scenes=False,
     )
-    assert [(ladder.preset, ladder.variant, ladder.budgets_s) for ladder in plan.ladders] == [
-        ("fast", "full", (600.0, 900.0, 1200.0)),
-        ("fast", "base", (600.0,)),
-        ("balanced", "full", (900.0, 1200.0)),
+    assert [
+        (ladder.preset, ladder.variant, ladder.budgets_s, ladder.seed) for ladder in plan.ladders
+    ] == [
+        ("fast", "full", (600.0, 900.0, 1200.0), 0),
+        ("fast", "base", (600.0,), 0),
+        ("balanced", "full", (900.0, 1200.0), 0),
+        ("fast", "full", (600.0,), 1),
+        ("fast", "full", (600.0,), 2),
     ]
 
 

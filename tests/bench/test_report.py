@@ -6,13 +6,17 @@ from benchlib.machine import Machine
 from benchlib.plan import make_plan
 from benchlib.report import (
     BenchReport,
+    judge_all,
     render_markdown,
     scene_rows,
+    seed_scores,
     target_checks,
+    tie_limit,
     write_json,
 )
 from benchlib.results import RunRow
 from benchlib.sessions import SessionOutcome
+from benchlib.verdicts import TIE_DB
 
 MACHINE = Machine("Test CPU", 2, "Linux", "3.11", "2.0", "2.13", "cpu", 2, (1.0, 0.5, 0.25))
 
@@ -147,3 +151,32 @@ def test_scene_rows_judge_each_scene_at_the_top_budget():
     assert table["corridor"][5] == "3.50" and table["corridor"][-1] == "**missed**"  # gap > 3
     assert table["lamp-film"][-1] == "fit failed"
     assert "### Every scene: full beside oracle" in render_markdown(report)
+
+
+def test_seed_runs_set_the_tie_limit_of_the_orderings():
+    rows = [
+        scene_run("room", "full", 31.6, 28.5, budget=180.0),
+        scene_run("room", "full", 31.9, 28.9, budget=180.0, seed=1),
+        scene_run("room", "full", 31.3, 28.2, budget=180.0, seed=2),
+        scene_run("room", "base", 31.5, 28.0, budget=180.0),
+    ]
+    report = full_report(rows)
+    assert seed_scores(report) == [(0, 31.6), (1, 31.9), (2, 31.3)]
+    assert math.isclose(tie_limit(report), 0.6)
+    table3 = next(v for v in judge_all(report) if v.comparison.title.startswith("Table 3"))
+    full_over_base = next(c for c in table3.claims
+                          if (c.claim.better, c.claim.worse) == ("full", "base"))
+    assert full_over_base.outcome == "tie"  # 0.1 dB apart, the seeds 0.6 dB
+    text = render_markdown(report)
+    assert "seed 0: 31.60, seed 1: 31.90, seed 2: 31.30 dB" in text
+    assert "a spread of 0.60 dB" in text
+    assert "| room | fast | full (seed 1) | 3 min |" in text
+    # Only the default seed's run answers for full elsewhere in the report.
+    checks = {c[0]: c[1:] for c in target_checks(report)}
+    assert checks["full − base, HDR PSNR dB"][0] == "0.10"
+
+
+def test_without_seed_runs_the_fixed_tie_limit_applies():
+    report = full_report([scene_run("room", "full", 31.6, 28.5, budget=180.0)])
+    assert tie_limit(report) == TIE_DB
+    assert "the seed spread was not measured" in render_markdown(report)

@@ -49,8 +49,9 @@ class SpeedProbe:
 
 
 def run_name(ladder: Ladder) -> str:
-    """Run folder name under ``session/fit/``."""
-    return f"bench-{ladder.preset}-{ladder.variant}"
+    """Run folder name under ``session/fit/`` (with the seed unless it is the default)."""
+    name = f"bench-{ladder.preset}-{ladder.variant}"
+    return f"{name}-seed{ladder.seed}" if ladder.seed else name
 
 
 def fit_command(session_dir: Path, ladder: Ladder, budget_s: float, fresh: bool) -> list[str]:
@@ -68,6 +69,8 @@ def fit_command(session_dir: Path, ladder: Ladder, budget_s: float, fresh: bool)
         f"{budget_s:g}s",
         "--run",
         run_name(ladder),
+        "--seed",
+        str(ladder.seed),
     )
     return command + (["--fresh"] if fresh else [])
 
@@ -186,7 +189,7 @@ def run_ladder(
     kept = [] if fresh else reusable_rungs(ladder, session_dir, out_dir)
     for index, budget in enumerate(ladder.budgets_s):
         tag = f"{ladder.session}/{name}/{budget:g}s"
-        row = RunRow(ladder.session, ladder.preset, ladder.variant, budget)
+        row = RunRow(ladder.session, ladder.preset, ladder.variant, budget, seed=ladder.seed)
         if index < len(kept):
             metrics = kept[index]
             row.process = usage_from_json(metrics[KEPT_KEY]["process"])

@@ -21,6 +21,7 @@ __all__ = [
     "Plan",
     "SessionSpec",
     "SCENE_SESSIONS",
+    "SEED_REPEATS",
     "TABLE4_ROWS",
     "make_plan",
     "planned_rungs",
@@ -106,12 +107,16 @@ class SessionSpec:
 
 @dataclass(frozen=True)
 class Ladder:
-    """One (session, preset, variant) trained once, scored at each budget on the way."""
+    """One (session, preset, variant) trained once, scored at each budget on the way.
+
+    ``seed`` is the fit's random seed (0: ``seecap fit``'s default).
+    """
 
     session: str
     preset: str
     variant: str
     budgets_s: tuple[float, ...]
+    seed: int = 0
 
 
 @dataclass(frozen=True)
@@ -152,6 +157,11 @@ SCENE_SESSIONS = tuple(
 table preset's ``full`` and ``oracle`` at the top budget: the trainer's targets per scene."""
 
 SCENE_VARIANTS = ("full", "oracle")
+
+SEED_REPEATS = (1, 2)
+"""Seeds of two more runs of the table preset's ``full`` at the table budget: beside the default
+seed's run they measure how far a score moves with the random draws alone, which tells a
+difference between variants from noise."""
 
 TABLE4_SESSIONS = (
     SessionSpec(
@@ -252,9 +262,10 @@ def make_plan(
             other variants (Tables 3 and 9) run at the table budget; every other preset runs
             only ``full``, up the ladder; each Table 4 session runs ``full`` at the table
             budget; each of :data:`SCENE_SESSIONS` runs :data:`SCENE_VARIANTS` at the top
-            budget, and so does the main session's ``oracle``; presets of
-            :data:`FULL_UNFITTED_PRESETS` are not fitted. With the defaults that is 149
-            minutes of training in 29 rungs.
+            budget, and so does the main session's ``oracle``; the table preset's ``full``
+            runs again at the table budget with each of :data:`SEED_REPEATS`; presets of
+            :data:`FULL_UNFITTED_PRESETS` are not fitted. With the defaults that is 155
+            minutes of training in 31 rungs.
         presets: every preset to run.
         variants: every variant to run (unsupported ones are left out with a note).
         budgets_s: the budget ladder, s (default: :data:`QUICK_BUDGETS_S` or
@@ -303,6 +314,11 @@ def make_plan(
     else:
         fitted = tuple(p for p in presets if p not in FULL_UNFITTED_PRESETS)
         ladders = _grid(fitted, variants, budgets, table_budget, table_preset, oracle_at_top=True)
+        if table_preset in fitted and "full" in variants:
+            ladders += [
+                Ladder(MAIN_SESSION.key, table_preset, "full", (table_budget,), seed=seed)
+                for seed in SEED_REPEATS
+            ]
         if any(p != table_preset for p in fitted) and any(v != "full" for v in variants):
             notes.append(f"presets other than {table_preset} run only the full variant")
         notes += [

@@ -132,10 +132,10 @@ MARKERS = {"fast": "circle", "balanced": "square", "paper": "triangle"}
 
 def speed_error_figure(rows: list[RunRow], session: str) -> np.ndarray:
     """HDR PSNR (top) and novel-exposure PSNR (bottom) against training time, one line per
-    preset/variant run on ``session``."""
+    preset/variant run on ``session`` with the default seed."""
     runs: dict[tuple[str, str], list[RunRow]] = {}
     for row in rows:
-        if row.session == session and row.ok:
+        if row.session == session and row.ok and not row.seed:
             runs.setdefault((row.preset, row.variant), []).append(row)
     height = max(600, 100 + 22 * len(runs))
     panels = []

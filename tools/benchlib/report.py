@@ -17,7 +17,7 @@ from benchlib.plan import TABLE4_ROWS, Plan
 from benchlib.results import RunRow
 from benchlib.sessions import SessionOutcome
 from benchlib.tables import capture_table, comparison_lines, markdown_table, runs_table
-from benchlib.verdicts import ComparisonVerdict, judge
+from benchlib.verdicts import TIE_DB, ComparisonVerdict, judge
 
 __all__ = [
     "BenchReport",
@@ -25,7 +25,9 @@ __all__ = [
     "judge_all",
     "render_markdown",
     "scene_rows",
+    "seed_scores",
     "target_checks",
+    "tie_limit",
     "write_json",
 ]
 
@@ -57,11 +59,12 @@ class BenchReport:
 def _at(
     rows: list[RunRow], session: str, preset: str, variant: str, budget_s: float
 ) -> RunRow | None:
-    """The row of that run at the largest budget not above ``budget_s`` (None if none)."""
+    """The default seed's row of that run at the largest budget not above ``budget_s``."""
     found = [
         r
         for r in rows
-        if (r.session, r.preset, r.variant) == (session, preset, variant) and r.budget_s <= budget_s
+        if (r.session, r.preset, r.variant, r.seed) == (session, preset, variant, 0)
+        and r.budget_s <= budget_s
     ]
     return max(found, key=lambda r: r.budget_s) if found else None
 
@@ -78,9 +81,39 @@ def comparison_rows(report: BenchReport, axis: str, keys: list[str]) -> dict[str
     return {k: _at(report.rows, main, plan.table_preset, k, plan.table_budget_s) for k in keys}
 
 
+def seed_scores(report: BenchReport) -> list[tuple[int, float]]:
+    """``(seed, HDR PSNR)`` of the table preset's ``full`` at the table budget, every seed run."""
+    plan = report.plan
+    return sorted(
+        (r.seed, r.hdr_psnr)
+        for r in report.rows
+        if (r.session, r.preset, r.variant, r.budget_s)
+        == (plan.sessions[0].key, plan.table_preset, "full", plan.table_budget_s)
+        and r.ok
+    )
+
+
+def tie_limit(report: BenchReport) -> float:
+    """Largest minus smallest HDR PSNR over the seeds when two or more ran, else TIE_DB."""
+    scores = [score for _, score in seed_scores(report)]
+    return max(scores) - min(scores) if len(scores) > 1 else TIE_DB
+
+
 def judge_all(report: BenchReport) -> list[ComparisonVerdict]:
-    """Every paper comparison judged on the runs measured so far."""
-    return [judge(c, comparison_rows(report, c.axis, list(c.rows))) for c in COMPARISONS]
+    """Every paper comparison judged on the runs measured so far, ties within the seed spread."""
+    tie_db = tie_limit(report)
+    return [judge(c, comparison_rows(report, c.axis, list(c.rows)), tie_db) for c in COMPARISONS]
+
+
+def _seed_line(report: BenchReport) -> str:
+    scores = seed_scores(report)
+    if len(scores) < 2:
+        return (f"One run per row: differences under {TIE_DB:g} dB count as ties (the seed "
+                "spread was not measured).")
+    listed = ", ".join(f"seed {seed}: {fmt(score)}" for seed, score in scores)
+    return (f"Seed spread: `full` at this budget scored {listed} dB with nothing but the seed "
+            f"changed, a spread of {fmt(tie_limit(report))} dB; differences smaller than that "
+            "are ties, not orderings.")
 
 
 def _check(name: str, value: float | None, target: str, met: bool | None) -> list[str]:
@@ -331,6 +364,8 @@ def render_markdown(report: BenchReport) -> str:
         "",
         f"Preset {plan.table_preset}, budget {plan.table_budget_s:g} s; ours are tone-mapped HDR "
         "and novel-exposure scores on the held-out views. An ordering is checked on HDR PSNR.",
+        "",
+        _seed_line(report),
         "",
     ]
     for verdict in judge_all(report):

@@ -38,6 +38,7 @@ class RunRow:
         preset: training preset.
         variant: model variant.
         budget_s: the time budget the run was given, s (cumulative over resumed rungs).
+        seed: the fit's random seed (0: the default).
         status: ``ok`` or what went wrong.
         steps: training steps completed in total.
         train_s: training seconds in total (resumed rungs included).
@@ -65,6 +66,7 @@ class RunRow:
     preset: str
     variant: str
     budget_s: float
+    seed: int = 0
     status: str = "ok"
     steps: int = 0
     train_s: float = NAN

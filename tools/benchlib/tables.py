@@ -26,7 +26,7 @@ def _budget(seconds: float) -> str:
 
 def runs_table(rows: list[RunRow]) -> str:
     """Every run at every budget, sorted by session, preset, variant and budget."""
-    ordered = sorted(rows, key=lambda r: (r.session, r.preset, r.variant, r.budget_s))
+    ordered = sorted(rows, key=lambda r: (r.session, r.preset, r.variant, r.seed, r.budget_s))
     body = []
     for r in ordered:
         usage = r.process
@@ -34,7 +34,7 @@ def runs_table(rows: list[RunRow]) -> str:
             [
                 r.session,
                 r.preset,
-                r.variant,
+                f"{r.variant} (seed {r.seed})" if r.seed else r.variant,
                 _budget(r.budget_s),
                 str(r.steps),
                 fmt(r.train_s, 0),

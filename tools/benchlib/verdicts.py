@@ -12,8 +12,9 @@ from benchlib.results import RunRow
 __all__ = ["TIE_DB", "ClaimVerdict", "ComparisonVerdict", "explain_difference", "judge"]
 
 TIE_DB = 0.05
-"""HDR PSNR differences smaller than this are ties: the report prints 0.01 dB, and a gap this
-small says nothing about an ordering measured from one run per row."""
+"""HDR PSNR differences smaller than this are ties when the seed spread was not measured: the
+report prints 0.01 dB, and a gap this small says nothing about an ordering measured from one
+run per row."""
 
 
 @dataclass(frozen=True)
@@ -38,10 +39,11 @@ class ClaimVerdict:
 
 @dataclass(frozen=True)
 class ComparisonVerdict:
-    """Every ordering of one comparison, with a one-line summary."""
+    """Every ordering of one comparison, with a one-line summary; ``tie_db`` is the tie limit."""
 
     comparison: Comparison
     claims: tuple[ClaimVerdict, ...]
+    tie_db: float = TIE_DB
 
     @property
     def summary(self) -> str:
@@ -51,7 +53,7 @@ class ComparisonVerdict:
         judged = len(self.claims) - counts["not measured"]
         if judged == 0:
             return "not measured"
-        extra = [f"{counts[o]} {word}" for o, word in (("tie", f"within {TIE_DB:g} dB"),
+        extra = [f"{counts[o]} {word}" for o, word in (("tie", f"within {self.tie_db:.2f} dB"),
                                                         ("not measured", "not measured"))
                  if counts[o]]
         tail = f" ({'; '.join(extra)})" if extra else ""
@@ -91,12 +93,15 @@ def explain_difference(better: RunRow, worse: RunRow) -> str:
     return "; ".join(parts)
 
 
-def judge(comparison: Comparison, rows: dict[str, RunRow | None]) -> ComparisonVerdict:
+def judge(
+    comparison: Comparison, rows: dict[str, RunRow | None], tie_db: float = TIE_DB
+) -> ComparisonVerdict:
     """Check each of the paper's orderings on our HDR PSNR.
 
     Args:
         comparison: the paper's comparison.
         rows: our run for each row key of the comparison (None or failed: not measured).
+        tie_db: differences below this are ties (the measured seed spread, when there is one).
     """
     verdicts = []
     for claim in paper_claims(comparison):
@@ -105,7 +110,7 @@ def judge(comparison: Comparison, rows: dict[str, RunRow | None]) -> ComparisonV
             verdicts.append(ClaimVerdict(claim, "not measured"))
             continue
         gap = better.hdr_psnr - worse.hdr_psnr
-        outcome = "tie" if abs(gap) < TIE_DB else "holds" if gap > 0 else "reversed"
+        outcome = "tie" if abs(gap) < tie_db else "holds" if gap > 0 else "reversed"
         reason = "" if outcome == "holds" else explain_difference(better, worse)
         verdicts.append(ClaimVerdict(claim, outcome, better.hdr_psnr, worse.hdr_psnr, reason))
-    return ComparisonVerdict(comparison, tuple(verdicts))
+    return ComparisonVerdict(comparison, tuple(verdicts), tie_db)
