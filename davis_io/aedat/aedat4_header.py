@@ -107,12 +107,14 @@ def packet_decompressor(
 ) -> Callable[[bytes], bytes | np.ndarray]:
     """A :func:`decompress` for one reader's packets, decoded one after the other.
 
-    For LZ4 each result is a new writable uint8 array (see
-    :class:`~davis_io.aedat.lz4_frame.FrameDecompressor`, which ``native_lz4`` is passed to)
-    whose bytes the decoded records may keep as views; other compressions give bytes.
+    Every result is new memory that the decoded records may keep as views, whatever the payload
+    was: for LZ4 a writable uint8 array (see :class:`~davis_io.aedat.lz4_frame.FrameDecompressor`,
+    which ``native_lz4`` is passed to), for Zstandard bytes, uncompressed a copy.
     """
     if compression in (Compression.LZ4, Compression.LZ4_HIGH):
         return FrameDecompressor(native_lz4).decompress
+    if compression is Compression.NONE:
+        return bytearray  # a copy: the payload may be a view of the reader's reused buffer
     return functools.partial(decompress, compression)
 
 

@@ -65,6 +65,7 @@ class Aedat4Reader(FileReader):
         """
         super().__init__(path)
         self._native_lz4 = native_lz4
+        self._read_buffer = bytearray()
         try:
             self._read_header()
         except BaseException:
@@ -89,10 +90,11 @@ class Aedat4Reader(FileReader):
         if notes:
             yield Packet(notes=notes)
 
-    def _walk(self) -> Iterator[tuple[int, int, int, bytes] | str]:
+    def _walk(self) -> Iterator[tuple[int, int, int, memoryview] | str]:
         """Read packets in file order: (index, offset, stream id, payload) or a note string.
 
-        Packets of unknown streams are skipped here, with one note per stream.
+        Each payload is a view of a buffer that the next packet's payload overwrites. Packets
+        of unknown streams are skipped here, with one note per stream.
         """
         offset, index, skipped = self._data_start, 0, set()
         while offset < self._data_end:
@@ -105,7 +107,7 @@ class Aedat4Reader(FileReader):
             if size < 0:
                 raise FormatError(f"packet {index} declares a negative size {size}",
                                   path=str(self.path), offset=offset)
-            payload = self._file.read(min(size, self._data_end - offset - _PACKET_HEADER.size))
+            payload = self._read_payload(min(size, self._data_end - offset - _PACKET_HEADER.size))
             if len(payload) < size:
                 yield warn_note(
                     f"{self.path}: file truncated at byte offset {offset}: packet {index} needs "
@@ -142,6 +144,13 @@ class Aedat4Reader(FileReader):
             yield clip_packet(packet, start_us, end_us)
 
     # ---- internals ---------------------------------------------------------------------------
+
+    def _read_payload(self, size: int) -> memoryview:
+        """The next ``size`` bytes of the file (fewer at its end) in the reused read buffer."""
+        if len(self._read_buffer) < size:
+            self._read_buffer = bytearray(size)
+        view = memoryview(self._read_buffer)[:size]
+        return view[: self._file.readinto(view)]
 
     def _read_at(self, offset: int, size: int) -> bytes:
         self._file.seek(offset)

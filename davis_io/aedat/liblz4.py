@@ -61,7 +61,7 @@ def system_liblz4() -> ctypes.CDLL | None:
             ctypes.c_void_p,
             ctypes.c_void_p,
             size_p,
-            ctypes.c_char_p,
+            ctypes.c_void_p,
             size_p,
             ctypes.POINTER(_DecompressOptions),
         ]
@@ -87,7 +87,7 @@ class NativeFrameDecoder:
         self._context = self._new_context()
         self._finalizer = weakref.finalize(self, self._free, lib, self._context)
 
-    def decode_into(self, frame: bytes, out: np.ndarray) -> int:
+    def decode_into(self, frame: bytes | memoryview, out: np.ndarray) -> int:
         """Decompress the complete LZ4 frame ``frame`` into ``out`` (uint8, contiguous).
 
         Returns:
@@ -102,7 +102,7 @@ class NativeFrameDecoder:
             self._context,
             out.ctypes.data,
             ctypes.byref(self._dst_size),
-            frame,
+            np.frombuffer(frame, np.uint8).ctypes.data,
             ctypes.byref(self._src_size),
             ctypes.byref(self._options),
         )

@@ -104,7 +104,7 @@ class FrameDecompressor:
         """True when frames are decoded by the system's liblz4."""
         return self._native is not None
 
-    def decompress(self, data: bytes) -> np.ndarray:
+    def decompress(self, data: bytes | memoryview) -> np.ndarray:
         """Decompress one complete LZ4 frame into a new uint8 array.
 
         Raises:
@@ -117,7 +117,7 @@ class FrameDecompressor:
             return np.frombuffer(bytearray(lz4.frame.decompress(data)), np.uint8)
         out = np.empty(layout.capacity, np.uint8)
         if self._native is not None:
-            size = self._native.decode_into(bytes(data), out)
+            size = self._native.decode_into(data, out)
         else:
             size = _decode_blocks(data, layout, out)
         if layout.content_size is not None and size != layout.content_size:
