@@ -33,7 +33,7 @@ bench-quick: $(STAMP)
 	$(BIN)/python tools/bench.py --quick
 
 bench: $(STAMP)
-	$(BIN)/python tools/bench.py
+	$(BIN)/python tools/bench.py --publish
 
 lint: $(STAMP)
 	$(BIN)/pip install -q ruff

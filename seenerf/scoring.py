@@ -225,21 +225,24 @@ def plot_crf(model: SeeNerfModel, data: TrainingData, views: RenderedViews, path
 
 
 def crf_error(model: SeeNerfModel, data: TrainingData, views: RenderedViews) -> dict | None:
-    """RMS and largest difference of the learned and the true response, per channel.
+    """RMS and largest difference of the learned and the true response, per channel in use.
 
-    Compared where the true response is between 0.01 and 0.99 (below and above, every curve
-    clips) and the learned curve was evaluated; None without a CRF or a true one.
+    Only the curves the sensor's pixels go through are compared (a monochrome sensor uses the
+    first; the others are never trained), where the true response is between 0.01 and 0.99
+    (below and above, every curve clips) and the learned curve was evaluated. Returns
+    ``{"channels": [...], "rms": [...], "max": [...]}``, or None without a CRF or a true one.
     """
     learned, true = learned_crf(model, data, views), _true_crf(data)
     if learned is None or true is None:
         return None
     (x, values), (true_x, true_values) = learned, true
     inside = (true_x >= x[0]) & (true_x <= x[-1])
+    channels = [int(c) for c in np.unique(data.channel)]
     rms, largest = [], []
-    for channel in range(values.shape[1]):
+    for channel in channels:
         reference = true_values[:, min(channel, true_values.shape[1] - 1)]
         keep = inside & (reference > 0.01) & (reference < 0.99)
         difference = np.interp(true_x[keep], x, values[:, channel]) - reference[keep]
         rms.append(float(np.sqrt(np.mean(difference**2))) if keep.any() else float("nan"))
         largest.append(float(np.max(np.abs(difference))) if keep.any() else float("nan"))
-    return {"rms": rms, "max": largest}
+    return {"channels": channels, "rms": rms, "max": largest}

@@ -5,7 +5,7 @@ One command regenerates every number of the report:
     python tools/bench.py [--quick] [--out bench-out] [--poses auto|estimated|truth]
                           [--presets fast ...] [--variants full ...] [--budgets 60 180 ...]
                           [--table-budget S] [--table4 | --no-table4] [--scenes | --no-scenes]
-                          [--no-capture] [--fresh]
+                          [--no-capture] [--fresh] [--publish]
 
 1. Sessions: the ``room`` benchmark of ``make_benchmark.py``, the Table 4 sessions (input
    exposure x1/16, x1, x16 of 0.016 s at a fixed gain; DVS noise x1, x2, x4) and the other four
@@ -13,7 +13,7 @@ One command regenerates every number of the report:
    reused by later runs.
 2. Runs: each preset x variant, each in its own ``seecap fit`` process per budget (a ladder of
    budgets resumes one run), scored on the held-out views against the emulator's truth; on
-   every scene, ``full`` beside ``oracle`` at the top budget. The full plan is 149 minutes of
+   every scene, ``full`` beside ``oracle`` at the top budget. The full plan is 155 minutes of
    training, about three and a half hours in all on a 2-core machine (``benchlib/plan.py``).
 3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here.
 4. Capture side: ``bench_decode.py``, ``bench_usb.py`` and ``bench_record.py``.
@@ -23,7 +23,8 @@ Writes ``OUT/report.md`` (a section for BENCHMARKS.md), ``OUT/results.json`` and
 leaves a partial one. Rerunning the same command resumes: every rung whose metrics are kept
 under ``OUT/runs/`` (and whose checkpoint is still there) is read back, not trained, and the
 report counts them; ``--fresh`` trains every rung again (sessions are still reused: delete
-``OUT/sessions/`` to make them again).
+``OUT/sessions/`` to make them again). ``--publish`` (full mode) then splices the report into
+BENCHMARKS.md between its markers and copies the plot and JSON to ``bench-results/``.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from benchlib.machine import describe_machine, exact_command
 from benchlib.plan import make_plan, planned_rungs, planned_training_s
 from benchlib.plot import speed_error_figure, write_png
 from benchlib.poses_step import POSE_SOURCES, resolve_pose_source
+from benchlib.publish import publish
 from benchlib.report import BenchReport, render_markdown, write_json
 from benchlib.results import RunRow
 from benchlib.sessions import prepare_session
@@ -101,7 +103,16 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
         action="store_true",
         help="train every rung again instead of reading back earlier ones",
     )
-    return parser.parse_args(argv)
+    parser.add_argument(
+        "--publish",
+        action="store_true",
+        help="at the end, write the report into BENCHMARKS.md and its plot and JSON into "
+        "bench-results/ (full mode only)",
+    )
+    args = parser.parse_args(argv)
+    if args.publish and args.quick:
+        parser.error("--publish keeps the full report in BENCHMARKS.md; drop --quick")
+    return args
 
 
 def write_outputs(report: BenchReport, out: Path) -> None:
@@ -197,6 +208,9 @@ def main(argv: list[str] | None = None, command: str | None = None) -> int:
     report.wall_s = time.monotonic() - started
     write_outputs(report, out)
     print(f"report: {out / 'report.md'} ({report.wall_s / 60:.1f} min)")
+    if args.publish:
+        folder = publish(report, out, TOOLS_DIR.parent / "BENCHMARKS.md")
+        print(f"published: BENCHMARKS.md, {folder}")
     failed = [s for s in report.sessions if s.error] + [r for r in report.rows if not r.ok]
     return 0 if not failed else 1
 

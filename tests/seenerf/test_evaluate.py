@@ -67,3 +67,21 @@ def test_crf_error_is_zero_for_the_true_curve_and_grows_with_a_shift():
     # 0.3125), so a shift of 0.5 moves the curve by up to about 0.09.
     assert 0.04 < min(shifted["rms"]) and 0.08 < max(shifted["max"]) < 0.11
     assert crf_error(SimpleNamespace(crf=None), scene, views) is None
+
+
+def test_crf_error_of_a_monochrome_sensor_compares_only_the_curve_it_uses():
+    from types import SimpleNamespace
+
+    import torch
+
+    from davis_io.types import ColorFilter
+    from seenerf.scoring import RenderedViews, crf_error
+    from seenerf.synthetic import plane_scene, true_response
+
+    scene = plane_scene(height=8, width=10, frames=2, b=2, test_views=0, color=ColorFilter.MONO)
+    views = RenderedViews(np.zeros((0, 4, 4)), ())
+    offsets = torch.tensor([0.0, 2.0, 2.0])  # the unused green and blue curves far off
+
+    model = SimpleNamespace(crf=lambda x: torch.as_tensor(true_response((x + offsets).numpy())))
+    error = crf_error(model, scene, views)
+    assert error["channels"] == [0] and len(error["rms"]) == 1 and error["rms"][0] < 2e-3

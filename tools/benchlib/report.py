@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -397,7 +398,10 @@ def render_markdown(report: BenchReport) -> str:
 
 
 def write_json(report: BenchReport, path: Path) -> None:
-    """Every measured value (runs, verdicts, capture output lines) as JSON."""
+    """Every measured value (runs, verdicts, capture output lines) as JSON.
+
+    Paths under the working folder are written relative to it, so the file can be published.
+    """
 
     def default(value):
         if isinstance(value, Path):
@@ -411,4 +415,5 @@ def write_json(report: BenchReport, path: Path) -> None:
         {**dataclasses.asdict(v), "summary": v.summary} for v in judge_all(report)
     ]
     payload["targets"] = target_checks(report)
-    path.write_text(json.dumps(payload, indent=1, default=default, allow_nan=True) + "\n")
+    text = json.dumps(payload, indent=1, default=default, allow_nan=True)
+    path.write_text(text.replace(f"{Path.cwd()}{os.sep}", "") + "\n")

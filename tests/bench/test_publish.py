@@ -1,0 +1,65 @@
+import json
+
+import pytest
+from benchlib.machine import Machine
+from benchlib.plan import make_plan
+from benchlib.publish import BEGIN, END, RESULTS_FOLDER, publish, splice
+from benchlib.report import BenchReport, write_json
+from benchlib.results import RunRow
+from benchlib.sessions import SessionOutcome
+
+MACHINE = Machine("Test CPU", 2, "Linux", "3.11", "2.0", "2.13", "cpu", 2, (1.0, 0.5, 0.25))
+
+
+def full_run_report(sessions=()):
+    plan = make_plan(False, ("fast",), ("full",))
+    rows = [RunRow("room", "fast", "full", 600.0, hdr_psnr=31.0, novel_psnr=30.5, steps=6000)]
+    report = BenchReport("python tools/bench.py", MACHINE, "2026-01-01 00:00 UTC", plan, "truth")
+    report.rows, report.sessions = rows, list(sessions)
+    return report
+
+
+def test_splice_replaces_only_the_text_between_the_markers():
+    document = f"# Title\n\nkept above\n{BEGIN}\nold report\n{END}\nkept below\n"
+    spliced = splice(document, "## New\n\nnumbers\n")
+    assert spliced == f"# Title\n\nkept above\n{BEGIN}\n\n## New\n\nnumbers\n\n{END}\nkept below\n"
+    assert splice(spliced, "## New\n\nnumbers") == spliced  # idempotent
+
+
+@pytest.mark.parametrize(
+    "document",
+    ["no markers", f"{BEGIN}\nonly the start", f"{END}\n{BEGIN}\n", f"{BEGIN}{BEGIN}{END}"],
+)
+def test_splice_refuses_a_document_without_one_ordered_pair_of_markers(document):
+    with pytest.raises(ValueError, match="BENCHMARKS.md"):
+        splice(document, "report")
+
+
+def test_publish_links_the_copied_plot_and_keeps_the_hand_written_text(tmp_path):
+    out = tmp_path / "bench-out"
+    out.mkdir()
+    report = full_run_report()
+    (out / report.plot_name).write_bytes(b"png bytes")
+    write_json(report, out / "results.json")
+    document = tmp_path / "BENCHMARKS.md"
+    document.write_text(f"# Benchmarks\n\n{BEGIN}\n{END}\n\n## Analysis\n")
+
+    folder = publish(report, out, document)
+
+    assert folder == tmp_path / RESULTS_FOLDER
+    assert (folder / report.plot_name).read_bytes() == b"png bytes"
+    assert json.loads((folder / "results.json").read_text())["rows"][0]["hdr_psnr"] == 31.0
+    text = document.read_text()
+    assert f"![speed against error]({RESULTS_FOLDER}/{report.plot_name})" in text
+    assert text.startswith("# Benchmarks\n") and text.endswith(f"{END}\n\n## Analysis\n")
+    assert "| room | fast | full |" in text
+
+
+def test_json_paths_under_the_working_folder_are_relative(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    spec = make_plan(False, ("fast",), ("full",)).sessions[0]
+    report = full_run_report([SessionOutcome(spec, tmp_path / "sessions" / "room")])
+    write_json(report, tmp_path / "results.json")
+    text = (tmp_path / "results.json").read_text()
+    assert str(tmp_path) not in text
+    assert json.loads(text)["sessions"][0]["folder"] == "sessions/room"
