@@ -203,7 +203,11 @@ def _check_pixels(window: np.ndarray, width: int, height: int) -> None:
 
 
 def _calibration_offsets(
-    times: np.ndarray, is_on: np.ndarray, key: np.ndarray, split_us: np.ndarray, b: int,
+    times: np.ndarray,
+    is_on: np.ndarray,
+    key: np.ndarray,
+    split_us: np.ndarray,
+    b: int,
     pixels: int,
 ) -> np.ndarray:
     """Fractional h() offsets per bin and pixel, ``(b, pixels)`` float64.
@@ -231,8 +235,9 @@ def _calibration_offsets(
     last_t = np.where(has_event, last_t.reshape(b, pixels), 0)
     offsets = np.zeros((b, pixels), dtype=np.float64)
     for i in range(b - 1):
-        edges = _BinEdges(has_event[i], has_event[i + 1], last_t[i], first_t[i + 1],
-                          last_p[i], first_p[i + 1])
+        edges = _BinEdges(
+            has_event[i], has_event[i + 1], last_t[i], first_t[i + 1], last_p[i], first_p[i + 1]
+        )
         _boundary_offsets(offsets, i, edges, int(split_us[i + 1]))
     # Last bin: +p_last / 2 wherever it has events (expected residual of a uniform crossing).
     offsets[b - 1] += 0.5 * last_p[b - 1]

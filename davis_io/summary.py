@@ -113,8 +113,13 @@ def summarize(source: PacketSource, gap_us: int = DEFAULT_GAP_US) -> RecordingSu
     info = source.info
     summary = RecordingSummary(
         format=str(info.extra.get("format", info.origin.split(":")[0] or "unknown")),
-        camera=info.camera, serial=info.serial, width=info.width, height=info.height,
-        origin=info.origin, streams=list(info.extra.get("streams", [])))
+        camera=info.camera,
+        serial=info.serial,
+        width=info.width,
+        height=info.height,
+        origin=info.origin,
+        streams=list(info.extra.get("streams", [])),
+    )
     for packet in source:
         summary.packets += 1
         summary.dropped_events += packet.dropped_events
@@ -133,8 +138,9 @@ def summarize(source: PacketSource, gap_us: int = DEFAULT_GAP_US) -> RecordingSu
             name = TriggerKind(kind).name if known else str(kind)
             summary.trigger_kinds[name] = summary.trigger_kinds.get(name, 0) + int(count)
     if not summary.streams:
-        summary.streams = [name for name in ("events", "frames", "imu", "triggers")
-                           if getattr(summary, name).count]
+        summary.streams = [
+            name for name in ("events", "frames", "imu", "triggers") if getattr(summary, name).count
+        ]
     return summary
 
 
@@ -203,8 +209,10 @@ def format_summary(summary: RecordingSummary) -> str:
             f"  exposure starts {_listing(summary.frame_exposure_starts_us)} µs",
         ]
     temperature = summary.imu_mean_temperature_c
-    lines.append(f"imu         {imu.count:,}" + (
-        f" at {summary.imu_rate_hz:,.1f} Hz, mean {temperature:.1f} °C" if imu.count else ""))
+    lines.append(
+        f"imu         {imu.count:,}"
+        + (f" at {summary.imu_rate_hz:,.1f} Hz, mean {temperature:.1f} °C" if imu.count else "")
+    )
     kinds = ", ".join(f"{count} {name}" for name, count in sorted(summary.trigger_kinds.items()))
     lines.append(f"triggers    {tr.count:,}" + (f": {kinds}" if kinds else ""))
     lines += _problems(summary)
@@ -215,8 +223,10 @@ def _problems(summary: RecordingSummary) -> list[str]:
     lines = []
     for name in ("events", "frames", "imu", "triggers"):
         if getattr(summary, name).non_monotonic:
-            lines.append(f"WARNING     {getattr(summary, name).non_monotonic:,} {name} "
-                         "timestamps go backwards")
+            lines.append(
+                f"WARNING     {getattr(summary, name).non_monotonic:,} {name} "
+                "timestamps go backwards"
+            )
     for start, end in summary.gaps:
         lines.append(f"gap         no events from {start} to {end} µs ({end - start:,} µs)")
     if summary.dropped_events:

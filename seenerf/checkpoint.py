@@ -49,8 +49,7 @@ def _load_weights(path: Path, model, weights: dict) -> None:
         model.load_state_dict(weights)
     except RuntimeError as error:  # parameters missing, unexpected or of another shape
         raise CheckpointError(
-            f"{path}: its weights do not fit this version's model ({error}); "
-            "refit with --fresh"
+            f"{path}: its weights do not fit this version's model ({error}); refit with --fresh"
         ) from error
 
 

@@ -155,8 +155,10 @@ def main() -> None:
     print(f"ours ({lz4}): {result['ours_ev_s'] / 1e6:8.1f} M events/s (best of {repeats})")
     print(f"ours (python-lz4):  {result['python_lz4_ev_s'] / 1e6:8.1f} M events/s")
     print(f"dv-processing:      {result['dv_ev_s'] / 1e6:8.1f} M events/s")
-    print(f"ratio ours / dv-processing: {result['ratio']:.2f} "
-          f"(python-lz4 only: {result['python_lz4_ratio']:.2f})")
+    print(
+        f"ratio ours / dv-processing: {result['ratio']:.2f} "
+        f"(python-lz4 only: {result['python_lz4_ratio']:.2f})"
+    )
 
 
 if __name__ == "__main__":

@@ -48,9 +48,15 @@ def detect_format(path: str | Path) -> str:
     if start.startswith(b"#!AER-DAT"):
         raise FormatError(
             f"AEDAT version {start[9:].decode('ascii', 'replace')!r} is not supported "
-            "(supported: 2.0, 3.1, 4.0); convert it with DV or jAER", path=str(path), offset=9)
-    raise FormatError(f"first bytes {start!r} are not an AEDAT header ('#!AER-DAT<version>')",
-                      path=str(path), offset=0)
+            "(supported: 2.0, 3.1, 4.0); convert it with DV or jAER",
+            path=str(path),
+            offset=9,
+        )
+    raise FormatError(
+        f"first bytes {start!r} are not an AEDAT header ('#!AER-DAT<version>')",
+        path=str(path),
+        offset=0,
+    )
 
 
 def open_recording(path: str | Path, **options) -> PacketSource:

@@ -52,10 +52,15 @@ class Aedat2Decoder:
     groups carry over between pieces.
     """
 
-    def __init__(self, width: int, height: int,
-                 accel_full_scale_g: int = DEFAULT_ACCEL_FULL_SCALE_G,
-                 gyro_full_scale_dps: int = DEFAULT_GYRO_FULL_SCALE_DPS,
-                 global_shutter: bool = True, adc_gain: int = 1):
+    def __init__(
+        self,
+        width: int,
+        height: int,
+        accel_full_scale_g: int = DEFAULT_ACCEL_FULL_SCALE_G,
+        gyro_full_scale_dps: int = DEFAULT_GYRO_FULL_SCALE_DPS,
+        global_shutter: bool = True,
+        adc_gain: int = 1,
+    ):
         """Set the array size (for the y flip) and the IMU full scales (one LSB = scale / 32768)."""
         self.width, self.height = width, height
         self.g_per_lsb = accel_full_scale_g / 32768
@@ -77,10 +82,19 @@ class Aedat2Decoder:
         imu = self._imu(address, t, is_aps_or_imu & (readout == 3))
         aps = is_aps_or_imu & (readout < 2) & (x_field < self.width) & (y_field < self.height)
         frames, notes = self._frames.feed(
-            t[aps], x_field[aps], self.height - 1 - y_field[aps], readout[aps].astype(np.int64),
-            address[aps] & 0x3FF)
-        return Packet(events=events, frames=frames, imu=imu, triggers=triggers,
-                      notes=[warn_note(note) for note in notes])
+            t[aps],
+            x_field[aps],
+            self.height - 1 - y_field[aps],
+            readout[aps].astype(np.int64),
+            address[aps] & 0x3FF,
+        )
+        return Packet(
+            events=events,
+            frames=frames,
+            imu=imu,
+            triggers=triggers,
+            notes=[warn_note(note) for note in notes],
+        )
 
     def _unwrap(self, t32: np.ndarray) -> np.ndarray:
         """Unwrap 32-bit timestamps: a backward jump of more than 2^31 µs is one wrap."""
@@ -125,7 +139,7 @@ class Aedat2Decoder:
             starts = np.empty(0, dtype=np.int64)
         tail = starts[-1] + 7 if len(starts) else 0
         open_starts = np.flatnonzero(words["kind"][tail:] == 0)
-        self._pending_imu = words[tail + open_starts[-1]:] if len(open_starts) else words[:0]
+        self._pending_imu = words[tail + open_starts[-1] :] if len(open_starts) else words[:0]
         if len(self._pending_imu) >= 7:
             self._pending_imu = self._pending_imu[:0]
         groups = words["value"][starts[:, None] + np.arange(7)].astype(np.float64)
@@ -159,8 +173,9 @@ def read_header(file: BinaryIO, path: str) -> tuple[int, bytes]:
         if line.startswith(END_OF_HEADER):
             return file.tell(), b"".join(lines)
         if start > MAX_HEADER_BYTES:
-            raise FormatError("header longer than 16 MiB: not an AEDAT 2.0 file", path=path,
-                              offset=start)
+            raise FormatError(
+                "header longer than 16 MiB: not an AEDAT 2.0 file", path=path, offset=start
+            )
 
 
 class Aedat2Reader(FileReader):
@@ -171,9 +186,15 @@ class Aedat2Reader(FileReader):
     IMU full scales from the header's preference dump, else jAER's defaults (±8 g, ±1000 °/s).
     """
 
-    def __init__(self, path: str | Path, *, camera: str | None = None,
-                 accel_full_scale_g: int | None = None, gyro_full_scale_dps: int | None = None,
-                 global_shutter: bool = True):
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        camera: str | None = None,
+        accel_full_scale_g: int | None = None,
+        gyro_full_scale_dps: int | None = None,
+        global_shutter: bool = True,
+    ):
         """Open ``path`` and read its header.
 
         Raises:
@@ -189,19 +210,36 @@ class Aedat2Reader(FileReader):
                 raise FormatError(
                     f"chip {chip_name or '(none in header)'!r} is not a known DAVIS, so the array "
                     f"size is unknown; pass camera= one of {sorted(SENSOR_SIZES)}",
-                    path=str(self.path))
+                    path=str(self.path),
+                )
         except BaseException:
             self._file.close()
             raise
         accel = accel_full_scale_g or _header_scale(_ACCEL_KEY, header, DEFAULT_ACCEL_FULL_SCALE_G)
         gyro = gyro_full_scale_dps or _header_scale(_GYRO_KEY, header, DEFAULT_GYRO_FULL_SCALE_DPS)
-        self._decoder_args = (width, height, accel, gyro, global_shutter,
-                              2 if model == "DAVIS240" else 1)
+        self._decoder_args = (
+            width,
+            height,
+            accel,
+            gyro,
+            global_shutter,
+            2 if model == "DAVIS240" else 1,
+        )
         color = ColorFilter.RGBG if "color" in chip_name.lower() else ColorFilter.MONO
-        self.info = SourceInfo(camera=model, serial="", width=width, height=height,
-                               color_filter=color, origin=f"replay:{self.path.name}",
-                               extra={"format": "AEDAT 2.0", "chip": chip_name,
-                                      "accel_full_scale_g": accel, "gyro_full_scale_dps": gyro})
+        self.info = SourceInfo(
+            camera=model,
+            serial="",
+            width=width,
+            height=height,
+            color_filter=color,
+            origin=f"replay:{self.path.name}",
+            extra={
+                "format": "AEDAT 2.0",
+                "chip": chip_name,
+                "accel_full_scale_g": accel,
+                "gyro_full_scale_dps": gyro,
+            },
+        )
 
     def __iter__(self) -> Iterator[Packet]:
         decoder = Aedat2Decoder(*self._decoder_args)
@@ -214,9 +252,12 @@ class Aedat2Reader(FileReader):
             complete = len(data) - len(data) % RECORD_DTYPE.itemsize
             packet = decoder.decode(np.frombuffer(data, dtype=RECORD_DTYPE, count=complete // 8))
             if complete < len(data):
-                packet.notes.append(warn_note(
-                    f"{self.path}: file truncated at byte offset {offset + complete}: "
-                    f"{len(data) - complete} bytes of an incomplete record ignored"))
+                packet.notes.append(
+                    warn_note(
+                        f"{self.path}: file truncated at byte offset {offset + complete}: "
+                        f"{len(data) - complete} bytes of an incomplete record ignored"
+                    )
+                )
             yield packet
             offset += len(data)
 

@@ -51,8 +51,9 @@ class ApsAssembler:
         self._times: dict[str, int] = {}
         self._active = False
 
-    def feed(self, t: np.ndarray, x: np.ndarray, y: np.ndarray, readout: np.ndarray,
-             sample: np.ndarray) -> tuple[list[Frame], list[str]]:
+    def feed(
+        self, t: np.ndarray, x: np.ndarray, y: np.ndarray, readout: np.ndarray, sample: np.ndarray
+    ) -> tuple[list[Frame], list[str]]:
         """Consume samples (top-left coordinates, readout 0 reset / 1 signal); return new frames.
 
         Returns:
@@ -63,8 +64,10 @@ class ApsAssembler:
         frames, notes, done = [], [], 0
         for index in np.flatnonzero(first | last).tolist():
             self._store(x, y, readout, sample, slice(done, index))
-            kind = ("first" if first[index] else "last",
-                    "reset" if readout[index] == 0 else "signal")
+            kind = (
+                "first" if first[index] else "last",
+                "reset" if readout[index] == 0 else "signal",
+            )
             if kind == ("first", "reset"):
                 notes += self._start(int(t[index]))
             self._store(x, y, readout, sample, slice(index, index + 1))
@@ -77,8 +80,9 @@ class ApsAssembler:
     def _start(self, t: int) -> list[str]:
         notes = []
         if self._active:
-            notes.append(f"APS frame started at {self._times['readout_start_us']} µs never "
-                         "ended; dropped")
+            notes.append(
+                f"APS frame started at {self._times['readout_start_us']} µs never ended; dropped"
+            )
         self._seen[:] = False
         self._times = {"readout_start_us": t}
         if not self.global_shutter:
@@ -106,7 +110,9 @@ class ApsAssembler:
             if len(self._times) == 4 and self._seen.all():
                 image = correlated_double_sample(self._reads[0], self._reads[1])
                 return Frame(image=image, bit_depth=10, **self._times)
-            notes.append(f"APS frame started at {self._times['readout_start_us']} µs is "
-                         f"incomplete ({int(self._seen.sum())} of {self._seen.size} reads); "
-                         "dropped")
+            notes.append(
+                f"APS frame started at {self._times['readout_start_us']} µs is "
+                f"incomplete ({int(self._seen.sum())} of {self._seen.size} reads); "
+                "dropped"
+            )
         return None

@@ -23,8 +23,15 @@ MAX_HEADER_BYTES = 1 << 20
 
 _PACKET_HEADER = struct.Struct("<hhiiiiii")
 _POLARITY = np.dtype([("data", "<u4"), ("t", "<i4")])
-_IMU6 = np.dtype([("info", "<u4"), ("t", "<i4"), ("acc", "<f4", (3,)), ("gyro", "<f4", (3,)),
-                  ("temperature", "<f4")])
+_IMU6 = np.dtype(
+    [
+        ("info", "<u4"),
+        ("t", "<i4"),
+        ("acc", "<f4", (3,)),
+        ("gyro", "<f4", (3,)),
+        ("temperature", "<f4"),
+    ]
+)
 _FRAME_HEADER = struct.Struct("<Iiiiiiiii")
 _EVENT_SIZES = {0: 8, 1: 8, 3: 36}  # fixed event size per type; frames vary
 
@@ -53,9 +60,14 @@ class Aedat31Reader(FileReader):
             self._file.close()
             raise
         model, width, height = identify_chip(sources.get(1, next(iter(sources.values()), "")))
-        self.info = SourceInfo(camera=model, serial="", width=width, height=height,
-                               origin=f"replay:{self.path.name}",
-                               extra={"format": "AEDAT 3.1", "sources": sources})
+        self.info = SourceInfo(
+            camera=model,
+            serial="",
+            width=width,
+            height=height,
+            origin=f"replay:{self.path.name}",
+            extra={"format": "AEDAT 3.1", "sources": sources},
+        )
 
     def __iter__(self) -> Iterator[Packet]:
         self._file.seek(self._data_start)
@@ -64,28 +76,40 @@ class Aedat31Reader(FileReader):
             header = self._file.read(_PACKET_HEADER.size)
             if len(header) < _PACKET_HEADER.size:
                 if header:
-                    yield Packet(notes=[warn_note(
-                        f"{self.path}: file truncated at byte offset {offset}: incomplete "
-                        f"header of packet {index}; later data is lost")])
+                    yield Packet(
+                        notes=[
+                            warn_note(
+                                f"{self.path}: file truncated at byte offset {offset}: incomplete "
+                                f"header of packet {index}; later data is lost"
+                            )
+                        ]
+                    )
                 return
             fields = _check_header(header, offset, index, str(self.path))
             size = fields[2] * fields[5]
             payload = self._file.read(min(size, self._file_size - offset - len(header)))
             notes = []
             if len(payload) < size:
-                notes.append(warn_note(
-                    f"{self.path}: file truncated at byte offset {offset}: packet {index} needs "
-                    f"{size} payload bytes, {len(payload)} remain; its complete events are kept"))
+                notes.append(
+                    warn_note(
+                        f"{self.path}: file truncated at byte offset {offset}: packet {index} needs "
+                        f"{size} payload bytes, {len(payload)} remain; its complete events are kept"
+                    )
+                )
             try:
                 packet = decode_packet(fields, payload, notes)
             except FormatError as error:
-                raise FormatError(f"packet {index}: {error}", path=str(self.path),
-                                  offset=offset) from None
+                raise FormatError(
+                    f"packet {index}: {error}", path=str(self.path), offset=offset
+                ) from None
             if fields[0] not in _DECODERS and fields[0] not in skipped:
                 skipped.add(fields[0])
-                packet.notes.append(warn_note(
-                    f"{self.path}: packet {index} at byte offset {offset}: event type "
-                    f"{fields[0]} is not read (polarity, frame, IMU6, special are); skipped"))
+                packet.notes.append(
+                    warn_note(
+                        f"{self.path}: packet {index} at byte offset {offset}: event type "
+                        f"{fields[0]} is not read (polarity, frame, IMU6, special are); skipped"
+                    )
+                )
             yield packet
             if notes:
                 return
@@ -106,8 +130,9 @@ def _read_header(file: BinaryIO, path: str) -> tuple[int, dict[int, str]]:
         if line == END_OF_HEADER:
             return file.tell(), sources
         if not line.startswith(b"#") or not line.endswith(b"\n") or offset > MAX_HEADER_BYTES:
-            raise FormatError("header ends without the '#!END-HEADER' line", path=path,
-                              offset=offset)
+            raise FormatError(
+                "header ends without the '#!END-HEADER' line", path=path, offset=offset
+            )
         match = re.match(rb"#Source (\d+): (.*?)\r?\n", line)
         if match:
             sources[int(match.group(1))] = match.group(2).decode("utf-8", "replace")
@@ -117,13 +142,21 @@ def _check_header(header: bytes, offset: int, index: int, path: str) -> tuple:
     fields = _PACKET_HEADER.unpack(header)
     event_type, _, size, ts_offset, overflow, capacity, number, valid = fields
     fixed = _EVENT_SIZES.get(event_type)
-    bad = (size <= 0 or capacity < 0 or not 0 <= valid <= number <= capacity or overflow < 0
-           or (fixed is not None and size != fixed) or (event_type == 2 and size < 36))
+    bad = (
+        size <= 0
+        or capacity < 0
+        or not 0 <= valid <= number <= capacity
+        or overflow < 0
+        or (fixed is not None and size != fixed)
+        or (event_type == 2 and size < 36)
+    )
     if bad:
         raise FormatError(
             f"packet {index} header is inconsistent (type {event_type}, event size {size}, "
             f"capacity {capacity}, number {number}, valid {valid}, overflow {overflow})",
-            path=path, offset=offset)
+            path=path,
+            offset=offset,
+        )
     return fields
 
 
@@ -187,14 +220,23 @@ def _frames(payload: bytes, count: int, size: int, base: int) -> Packet:
         if not info & 1:
             continue
         if channels not in (1, 3, 4) or width < 0 or height < 0 or 36 + 2 * pixels > size:
-            raise FormatError(f"frame event at payload byte {start} has {width} x {height} x "
-                              f"{channels} pixels, which do not fit its {size}-byte event")
+            raise FormatError(
+                f"frame event at payload byte {start} has {width} x {height} x "
+                f"{channels} pixels, which do not fit its {size}-byte event"
+            )
         image = np.frombuffer(payload, dtype="<u2", count=pixels, offset=start + 36) >> 6
         shape = (height, width, channels) if channels > 1 else (height, width)
-        frames.append(Frame(image=image.astype(np.uint16).reshape(shape),
-                            exposure_start_us=base + soe, exposure_end_us=base + eoe,
-                            readout_start_us=base + sof, readout_end_us=base + eof,
-                            bit_depth=10, position=(x, y)))
+        frames.append(
+            Frame(
+                image=image.astype(np.uint16).reshape(shape),
+                exposure_start_us=base + soe,
+                exposure_end_us=base + eoe,
+                readout_start_us=base + sof,
+                readout_end_us=base + eof,
+                bit_depth=10,
+                position=(x, y),
+            )
+        )
     return Packet(frames=frames)
 
 

@@ -122,8 +122,13 @@ def compress(compression: Compression, data: bytes) -> bytes:
     """Compress one packet payload the way DV does (LZ4 frame with 64 KiB linked blocks)."""
     if compression in (Compression.LZ4, Compression.LZ4_HIGH):
         level = 9 if compression is Compression.LZ4_HIGH else 0
-        return lz4.frame.compress(data, compression_level=level, store_size=False,
-                                  block_size=lz4.frame.BLOCKSIZE_MAX64KB, block_linked=True)
+        return lz4.frame.compress(
+            data,
+            compression_level=level,
+            store_size=False,
+            block_size=lz4.frame.BLOCKSIZE_MAX64KB,
+            block_linked=True,
+        )
     if compression in (Compression.ZSTD, Compression.ZSTD_HIGH):
         level = 19 if compression is Compression.ZSTD_HIGH else 3
         return zstandard.ZstdCompressor(level=level).compress(data)
@@ -145,11 +150,14 @@ def parse_io_header(buf: bytes) -> IOHeader:
 
 def build_io_header(header: IOHeader) -> bytes:
     """Build the IOHeader; every field is written so the size never depends on the values."""
-    return build_buffer(b"IOHE", [
-        Scalar(0, "<i", int(header.compression)),
-        Scalar(1, "<q", header.data_table_position),
-        StringField(2, header.info_node),
-    ])
+    return build_buffer(
+        b"IOHE",
+        [
+            Scalar(0, "<i", int(header.compression)),
+            Scalar(1, "<q", header.data_table_position),
+            StringField(2, header.info_node),
+        ],
+    )
 
 
 def parse_info_node(xml_text: str) -> dict[int, StreamDescription]:
@@ -169,13 +177,20 @@ def parse_info_node(xml_text: str) -> dict[int, StreamDescription]:
             stream_id = int(node.get("name", ""))
         except ValueError:
             raise FlatBufferError(
-                f"stream node name {node.get('name')!r} is not an integer") from None
+                f"stream node name {node.get('name')!r} is not an integer"
+            ) from None
         attrs = _attrs(node)
         info_node = node.find("node[@name='info']")
         info = _attrs(info_node) if info_node is not None else {}
         streams[stream_id] = StreamDescription(
-            stream_id, attrs.get("typeIdentifier", ""), attrs.get("originalOutputName", ""),
-            _int(info.get("sizeX")), _int(info.get("sizeY")), info.get("source", ""), info)
+            stream_id,
+            attrs.get("typeIdentifier", ""),
+            attrs.get("originalOutputName", ""),
+            _int(info.get("sizeX")),
+            _int(info.get("sizeY")),
+            info.get("source", ""),
+            info,
+        )
     return streams
 
 
@@ -238,18 +253,27 @@ def parse_data_table(buf: bytes) -> list[DataTableEntry]:
     return [DataTableEntry(*row) for row in zip(*(c.tolist() for c in columns), strict=True)]
 
 
-_DATA_TABLE_COLUMNS = [(0, 0, "<i8"), (1, 0, "<i4"), (1, 4, "<i4"), (2, 0, "<i8"), (3, 0, "<i8"),
-                       (4, 0, "<i8")]
+_DATA_TABLE_COLUMNS = [
+    (0, 0, "<i8"),
+    (1, 0, "<i4"),
+    (1, 4, "<i4"),
+    (2, 0, "<i8"),
+    (3, 0, "<i8"),
+    (4, 0, "<i8"),
+]
 """FileDataTable row fields in :class:`DataTableEntry` order: (slot, offset in field, dtype)."""
 
 
 def build_data_table(entries: list[DataTableEntry]) -> bytes:
     """Build the ``FTAB`` FileDataTable FlatBuffer (uncompressed)."""
-    tables = [[
-        Scalar(0, "<q", entry.byte_offset),
-        StructField(1, "<ii", (entry.stream_id, entry.size)),
-        Scalar(2, "<q", entry.num_elements),
-        Scalar(3, "<q", entry.timestamp_start),
-        Scalar(4, "<q", entry.timestamp_end),
-    ] for entry in entries]
+    tables = [
+        [
+            Scalar(0, "<q", entry.byte_offset),
+            StructField(1, "<ii", (entry.stream_id, entry.size)),
+            Scalar(2, "<q", entry.num_elements),
+            Scalar(3, "<q", entry.timestamp_start),
+            Scalar(4, "<q", entry.timestamp_end),
+        ]
+        for entry in entries
+    ]
     return build_buffer(b"FTAB", [TablesField(0, tables)])

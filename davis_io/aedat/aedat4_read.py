@@ -100,18 +100,24 @@ class Aedat4Reader(FileReader):
         while offset < self._data_end:
             header = self._read_at(offset, _PACKET_HEADER.size)
             if len(header) < _PACKET_HEADER.size:
-                yield warn_note(f"{self.path}: file truncated at byte offset {offset}: "
-                                "incomplete packet header; later data is lost")
+                yield warn_note(
+                    f"{self.path}: file truncated at byte offset {offset}: "
+                    "incomplete packet header; later data is lost"
+                )
                 return
             stream_id, size = _PACKET_HEADER.unpack(header)
             if size < 0:
-                raise FormatError(f"packet {index} declares a negative size {size}",
-                                  path=str(self.path), offset=offset)
+                raise FormatError(
+                    f"packet {index} declares a negative size {size}",
+                    path=str(self.path),
+                    offset=offset,
+                )
             payload = self._read_payload(min(size, self._data_end - offset - _PACKET_HEADER.size))
             if len(payload) < size:
                 yield warn_note(
                     f"{self.path}: file truncated at byte offset {offset}: packet {index} needs "
-                    f"{size} bytes, {len(payload)} remain; later data is lost")
+                    f"{size} bytes, {len(payload)} remain; later data is lost"
+                )
                 return
             type_id = self._type_of(stream_id)
             if type_id in _DECODERS:
@@ -135,8 +141,11 @@ class Aedat4Reader(FileReader):
         for index, entry in enumerate(entries):
             type_id = self._type_of(entry.stream_id)
             slack = _FRAME_SLACK_US if type_id == "FRME" else 0
-            if (type_id not in _DECODERS or entry.timestamp_end < start_us
-                    or entry.timestamp_start >= end_us + slack):
+            if (
+                type_id not in _DECODERS
+                or entry.timestamp_end < start_us
+                or entry.timestamp_start >= end_us + slack
+            ):
                 continue
             payload_offset = self._payload_offset(index, entry)
             payload = self._read_at(payload_offset, entry.size)
@@ -167,8 +176,9 @@ class Aedat4Reader(FileReader):
         prefix = self._file.read(4)
         length = struct.unpack("<I", prefix)[0] if len(prefix) == 4 else file_size
         if length > file_size - len(MAGIC) - 4:
-            raise FormatError("file ends inside the IOHeader: truncated header", path=path,
-                              offset=len(MAGIC))
+            raise FormatError(
+                "file ends inside the IOHeader: truncated header", path=path, offset=len(MAGIC)
+            )
         try:
             header = parse_io_header(prefix + self._file.read(length))
             self.streams = parse_info_node(header.info_node)
@@ -181,9 +191,12 @@ class Aedat4Reader(FileReader):
         self.data_table: list[DataTableEntry] | None = None
         position = header.data_table_position
         if position > file_size:
-            self._header_notes.append(warn_note(
-                f"{path}: data table position {position} lies beyond the end of the file "
-                f"({file_size} bytes): file truncated; reading packets up to the end"))
+            self._header_notes.append(
+                warn_note(
+                    f"{path}: data table position {position} lies beyond the end of the file "
+                    f"({file_size} bytes): file truncated; reading packets up to the end"
+                )
+            )
         elif position >= self._data_start:
             self._data_end = position
             self.data_table = self._load_data_table(position)
@@ -194,9 +207,12 @@ class Aedat4Reader(FileReader):
         try:
             return parse_data_table(decompress(self.compression, blob))
         except (FormatError, *_CODEC_ERRORS) as error:
-            self._header_notes.append(warn_note(
-                f"{self.path}: data table at byte offset {position} is unreadable ({error}); "
-                "reading without it"))
+            self._header_notes.append(
+                warn_note(
+                    f"{self.path}: data table at byte offset {position} is unreadable ({error}); "
+                    "reading without it"
+                )
+            )
             return None
 
     def _source_info(self) -> SourceInfo:
@@ -214,8 +230,14 @@ class Aedat4Reader(FileReader):
         ts_offset = sized.info.get("tsOffset")
         if ts_offset and ts_offset.lstrip("-").isdigit():
             extra["ts_offset_us"] = int(ts_offset)
-        return SourceInfo(camera=camera, serial=serial, width=sized.width, height=sized.height,
-                          origin=f"replay:{self.path.name}", extra=extra)
+        return SourceInfo(
+            camera=camera,
+            serial=serial,
+            width=sized.width,
+            height=sized.height,
+            origin=f"replay:{self.path.name}",
+            extra=extra,
+        )
 
     def _type_of(self, stream_id: int) -> str:
         stream = self.streams.get(stream_id)
@@ -228,8 +250,11 @@ class Aedat4Reader(FileReader):
             return entry.byte_offset
         if self._read_at(entry.byte_offset, 8) == expected:
             return entry.byte_offset + 8
-        raise FormatError(f"data table row {index} points at no packet of stream "
-                          f"{entry.stream_id}", path=str(self.path), offset=entry.byte_offset)
+        raise FormatError(
+            f"data table row {index} points at no packet of stream {entry.stream_id}",
+            path=str(self.path),
+            offset=entry.byte_offset,
+        )
 
     def _decode(self, index: int, offset: int, stream_id: int, payload: bytes) -> Packet:
         """Decompress and decode one packet of a known stream type into arrays of its own."""
@@ -239,14 +264,18 @@ class Aedat4Reader(FileReader):
             return _DECODERS[type_id](stream, self._decompress(payload))
         except (FormatError, *_CODEC_ERRORS) as error:
             message = error if isinstance(error, FormatError) else f"cannot decompress: {error}"
-            raise FormatError(f"packet {index} (stream {stream_id}, {type_id}): {message}",
-                              path=str(self.path), offset=offset) from None
+            raise FormatError(
+                f"packet {index} (stream {stream_id}, {type_id}): {message}",
+                path=str(self.path),
+                offset=offset,
+            ) from None
 
     def _skip_note(self, index: int, offset: int, stream_id: int, type_id: str) -> str:
         kind = f"type {type_id!r}" if type_id else "not described in the infoNode"
-        return warn_note(f"{self.path}: packet {index} at byte offset {offset}: stream {stream_id} "
-                         f"({kind}) is not a known stream type; its packets are skipped")
-
+        return warn_note(
+            f"{self.path}: packet {index} at byte offset {offset}: stream {stream_id} "
+            f"({kind}) is not a known stream type; its packets are skipped"
+        )
 
 
 def _frame_packet(stream: StreamDescription, buf: bytes) -> Packet:
@@ -270,10 +299,14 @@ def clip_packet(packet: Packet, start_us: int, end_us: int) -> Packet:
         return (times >= start_us) & (times < end_us)
 
     frames = [f for f in packet.frames if start_us <= f.exposure_start_us < end_us]
-    return Packet(events=packet.events[inside(packet.events["t"])], frames=frames,
-                  imu=packet.imu[inside(packet.imu["t"])],
-                  triggers=packet.triggers[inside(packet.triggers["t"])],
-                  dropped_events=packet.dropped_events, notes=packet.notes)
+    return Packet(
+        events=packet.events[inside(packet.events["t"])],
+        frames=frames,
+        imu=packet.imu[inside(packet.imu["t"])],
+        triggers=packet.triggers[inside(packet.triggers["t"])],
+        dropped_events=packet.dropped_events,
+        notes=packet.notes,
+    )
 
 
 _DECODERS = {

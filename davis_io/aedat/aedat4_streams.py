@@ -34,8 +34,12 @@ __all__ = [
 ]
 
 RAW_EVENT_DTYPE = np.dtype(
-    {"names": ["t", "x", "y", "p"], "formats": ["<i8", "<i2", "<i2", "u1"],
-     "offsets": [0, 8, 10, 12], "itemsize": 16}
+    {
+        "names": ["t", "x", "y", "p"],
+        "formats": ["<i8", "<i2", "<i2", "u1"],
+        "offsets": [0, 8, 10, 12],
+        "itemsize": 16,
+    }
 )
 """The 16-byte little-endian ``dv.Event`` struct: timestamp, x, y, polarity (1 = ON), padding.
 
@@ -117,8 +121,9 @@ def decode_frame(buf: bytes, bit_depth_16: int = 16) -> Frame:
     expected = width * height * channels * itemsize
     if count != expected:
         raise FlatBufferError(f"frame has {count} pixel bytes, expected {expected}")
-    pixels = np.frombuffer(buf, dtype=np.dtype(dtype).newbyteorder("<"), count=count // itemsize,
-                           offset=start).astype(dtype)  # a copy: ``buf`` may be reused
+    pixels = np.frombuffer(
+        buf, dtype=np.dtype(dtype).newbyteorder("<"), count=count // itemsize, offset=start
+    ).astype(dtype)  # a copy: ``buf`` may be reused
     image = pixels.reshape((height, width, channels) if channels > 1 else (height, width))
     if channels > 1:  # stored BGR(A), ours RGB(A)
         image = image[..., [2, 1, 0, 3][:channels]].copy()
@@ -140,8 +145,12 @@ def _frame_times(table) -> dict[str, int]:
         soe, eoe = timestamp, timestamp + int(table.scalar(11, "<q", 0))
     if sof == 0 and eof == 0:
         sof, eof = soe, eoe
-    return {"exposure_start_us": soe, "exposure_end_us": eoe, "readout_start_us": sof,
-            "readout_end_us": eof}
+    return {
+        "exposure_start_us": soe,
+        "exposure_end_us": eoe,
+        "readout_start_us": sof,
+        "readout_end_us": eof,
+    }
 
 
 def encode_frame(frame: Frame) -> bytes:
@@ -159,8 +168,13 @@ def encode_frame(frame: Frame) -> bytes:
     else:
         depth = 2
         pixels = np.ascontiguousarray(image.astype("<u2") << (16 - frame.bit_depth))
-    times = (frame.exposure_start_us, frame.readout_start_us, frame.readout_end_us,
-             frame.exposure_start_us, frame.exposure_end_us)
+    times = (
+        frame.exposure_start_us,
+        frame.readout_start_us,
+        frame.readout_end_us,
+        frame.exposure_start_us,
+        frame.exposure_end_us,
+    )
     fields = [Scalar(slot, "<q", value) for slot, value in enumerate(times)]
     fields += [
         Scalar(5, "<b", depth + 8 * (channels - 1)),

@@ -50,8 +50,13 @@ class Aedat4Writer(Closing):
     so that :class:`Aedat4Reader` gives back exactly the values written.
     """
 
-    def __init__(self, path: str | Path, info: SourceInfo,
-                 compression: Compression = Compression.LZ4, frame_bit_depth: int = 10):
+    def __init__(
+        self,
+        path: str | Path,
+        info: SourceInfo,
+        compression: Compression = Compression.LZ4,
+        frame_bit_depth: int = 10,
+    ):
         """Create ``path`` and write its header.
 
         Args:
@@ -62,20 +67,25 @@ class Aedat4Writer(Closing):
         """
         if not 9 <= frame_bit_depth <= 16:
             raise UsageError(
-                f"frame_bit_depth must be 9..16 for 16-bit frames, not {frame_bit_depth}")
+                f"frame_bit_depth must be 9..16 for 16-bit frames, not {frame_bit_depth}"
+            )
         self.path = Path(path)
         self.compression = Compression(compression)
         self.frame_bit_depth = frame_bit_depth
         self._entries: list[DataTableEntry] = []
         source = f"{info.camera}_{info.serial}" if info.serial else info.camera
         size = (info.width, info.height)
-        self._info_node = build_info_node([
-            StreamDescription(0, "EVTS", "events", *size, source),
-            StreamDescription(1, "FRME", "frames", *size, source,
-                              {FRAME_BIT_DEPTH_KEY: frame_bit_depth}),
-            StreamDescription(2, "IMUS", "imu", source=source),
-            StreamDescription(3, "TRIG", "triggers", source=source),
-        ], self.compression)
+        self._info_node = build_info_node(
+            [
+                StreamDescription(0, "EVTS", "events", *size, source),
+                StreamDescription(
+                    1, "FRME", "frames", *size, source, {FRAME_BIT_DEPTH_KEY: frame_bit_depth}
+                ),
+                StreamDescription(2, "IMUS", "imu", source=source),
+                StreamDescription(3, "TRIG", "triggers", source=source),
+            ],
+            self.compression,
+        )
         self._file: BinaryIO = self.path.open("wb")
         self._file.write(MAGIC + self._header(_TABLE_PLACEHOLDER))
 
@@ -112,20 +122,33 @@ class Aedat4Writer(Closing):
         if frame.image.dtype == np.uint16 and frame.bit_depth != self.frame_bit_depth:
             raise UsageError(
                 f"frame has bit depth {frame.bit_depth} but the writer was opened with "
-                f"frame_bit_depth={self.frame_bit_depth}; open it with the frames' depth")
+                f"frame_bit_depth={self.frame_bit_depth}; open it with the frames' depth"
+            )
 
     def _write_packet(self, type_id: str, flatbuffer: bytes, times: np.ndarray) -> None:
         payload = compress(self.compression, flatbuffer)
         stream_id = _STREAM_IDS[type_id]
         self._file.write(struct.pack("<ii", stream_id, len(payload)))
-        self._entries.append(DataTableEntry(
-            self._file.tell(), stream_id, len(payload), len(times), int(times.min()),
-            int(times.max())))
+        self._entries.append(
+            DataTableEntry(
+                self._file.tell(),
+                stream_id,
+                len(payload),
+                len(times),
+                int(times.min()),
+                int(times.max()),
+            )
+        )
         self._file.write(payload)
 
 
-def write_aedat4(packets: Iterable[Packet], path: str | Path, info: SourceInfo | None = None,
-                 compression: Compression = Compression.LZ4, frame_bit_depth: int = 10) -> Path:
+def write_aedat4(
+    packets: Iterable[Packet],
+    path: str | Path,
+    info: SourceInfo | None = None,
+    compression: Compression = Compression.LZ4,
+    frame_bit_depth: int = 10,
+) -> Path:
     """Write every packet of a source (or any iterable of packets) to an AEDAT 4.0 file.
 
     Args:

@@ -104,9 +104,7 @@ class FlatTable:
             for i in range(count)
         ]
 
-    def table_columns(
-        self, slot: int, columns: list[tuple[int, int, str]]
-    ) -> list[np.ndarray]:
+    def table_columns(self, slot: int, columns: list[tuple[int, int, str]]) -> list[np.ndarray]:
         """Read fields of every table in a vector of tables at once, one array per column.
 
         Args:

@@ -23,7 +23,9 @@ def run(args: argparse.Namespace) -> int:
         return 1
     for camera in cameras:
         state = "usable" if camera.usable else f"NOT usable: {camera.problem}"
-        print(f"{camera.model}  serial {camera.serial or '?'}  firmware {camera.firmware}  "
-              f"logic {camera.logic or '?'}  USB {camera.speed}  "
-              f"bus {camera.bus} address {camera.address}\n  {state}")
+        print(
+            f"{camera.model}  serial {camera.serial or '?'}  firmware {camera.firmware}  "
+            f"logic {camera.logic or '?'}  USB {camera.speed}  "
+            f"bus {camera.bus} address {camera.address}\n  {state}"
+        )
     return 0

@@ -14,8 +14,12 @@ HELP = "check this machine: libusb, camera permissions, udev rule, pycolmap, tor
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """``--path`` of the folder sessions will be written to."""
-    parser.add_argument("--path", type=Path, default=Path("."),
-                        help="folder where sessions will be written (free disk space)")
+    parser.add_argument(
+        "--path",
+        type=Path,
+        default=Path("."),
+        help="folder where sessions will be written (free disk space)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:

@@ -13,8 +13,13 @@ HELP = "export a session's events, frames, IMU and triggers to an AEDAT 4.0 file
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the options of ``seecap export``."""
     parser.add_argument("session", type=Path, help="session folder")
-    parser.add_argument("--aedat4", type=Path, required=True, metavar="FILE",
-                        help="AEDAT 4.0 file to write (opens in DV and dv-processing)")
+    parser.add_argument(
+        "--aedat4",
+        type=Path,
+        required=True,
+        metavar="FILE",
+        help="AEDAT 4.0 file to write (opens in DV and dv-processing)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:

@@ -15,12 +15,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the verb's arguments."""
     parser.add_argument("path", type=Path, help="recording file or session folder")
     parser.add_argument("--json", action="store_true", help="print machine-readable JSON")
-    parser.add_argument("--raw-usb", metavar="MODEL",
-                        help="PATH is a raw USB bulk-IN dump of camera MODEL (davis346, davis240)")
-    parser.add_argument("--frames", action="store_true",
-                        help="session folders: add a per-frame table")
-    parser.add_argument("--repair", action="store_true",
-                        help="session folders: repair a recording that never closed")
+    parser.add_argument(
+        "--raw-usb",
+        metavar="MODEL",
+        help="PATH is a raw USB bulk-IN dump of camera MODEL (davis346, davis240)",
+    )
+    parser.add_argument(
+        "--frames", action="store_true", help="session folders: add a per-frame table"
+    )
+    parser.add_argument(
+        "--repair",
+        action="store_true",
+        help="session folders: repair a recording that never closed",
+    )
 
 
 def run(args: argparse.Namespace) -> int:

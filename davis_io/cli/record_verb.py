@@ -51,8 +51,10 @@ def run(args: argparse.Namespace) -> int:
         emulate=args.emulate,
     )
     if args.replay is not None and args.exposure is not None:
-        print("seecap record: --exposure is ignored with --replay (the file's exposure is "
-              "measured)", file=sys.stderr)
+        print(
+            "seecap record: --exposure is ignored with --replay (the file's exposure is measured)",
+            file=sys.stderr,
+        )
     out_dir = args.out or Path(default_session_name())
     printer = _StatusPrinter()
     result = record_capture(

@@ -13,8 +13,11 @@ HELP = "print the udev rule giving the logged-in user access to DAVIS cameras (-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """``--install``."""
-    parser.add_argument("--install", action="store_true",
-                        help="write the rule to /etc/udev/rules.d and reload udev (needs root)")
+    parser.add_argument(
+        "--install",
+        action="store_true",
+        help="write the rule to /etc/udev/rules.d and reload udev (needs root)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:

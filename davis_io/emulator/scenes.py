@@ -101,20 +101,32 @@ def room() -> Scene:
     parts = _room((-3.0, -1.8, -1.0), (3.0, 1.2, 6.5), walls)
     parts += _box((-0.9, 0.45, 3.0), (0.5, 1.2, 4.0), _tiled(_COOL_PALETTE, 0.2, 0.05, seed=21))
     parts += _box((-3.0, -0.9, 5.0), (-1.9, 1.2, 6.5), _tiled(_DARK_PALETTE, 0.25, 0.01, seed=22))
-    parts += _box((1.0, 0.1, 4.8), (2.3, 1.2, 5.8),
-                  _striped((0.6, 0.5, 0.3), (0.15, 0.3, 0.4), 0.12, 0, seed=23))
+    parts += _box(
+        (1.0, 0.1, 4.8),
+        (2.3, 1.2, 5.8),
+        _striped((0.6, 0.5, 0.3), (0.15, 0.3, 0.4), 0.12, 0, seed=23),
+    )
     parts += [
-        (Sphere((-1.3, 0.7, 2.6), 0.5),
-         _striped((0.7, 0.7, 0.65), (0.5, 0.1, 0.1), 0.1, 1, seed=24)),
+        (
+            Sphere((-1.3, 0.7, 2.6), 0.5),
+            _striped((0.7, 0.7, 0.65), (0.5, 0.1, 0.1), 0.1, 1, seed=24),
+        ),
         (Sphere((1.55, -0.55, 4.4), 0.25), _lamp(80.0, (1.0, 0.85, 0.6), seed=25)),
     ]
     lights = (
         PointLight((1.55, -0.55, 4.4), (5.0, 4.2, 3.0)),
         PointLight((0.0, -1.6, 1.0), (0.35, 0.35, 0.4)),
     )
-    return _scene("room", parts, lights=lights, ambient=(0.004, 0.004, 0.005),
-                  background=(0.001,) * 3, camera_center=(0.0, -0.1, 0.0),
-                  target=(0.0, 0.2, 4.0), baseline=0.12)
+    return _scene(
+        "room",
+        parts,
+        lights=lights,
+        ambient=(0.004, 0.004, 0.005),
+        background=(0.001,) * 3,
+        camera_center=(0.0, -0.1, 0.0),
+        target=(0.0, 0.2, 4.0),
+        baseline=0.12,
+    )
 
 
 def lamp() -> Scene:
@@ -128,26 +140,44 @@ def lamp() -> Scene:
         _tiled(_DARK_PALETTE + _COOL_PALETTE[:2], 0.3, 0.01, seed=36),
     ]
     parts = _room((-2.5, -1.8, -1.0), (2.5, 1.6, 5.0), walls)
-    parts += _box((-1.8, 0.6, 1.6), (1.8, 0.7, 4.6),
-                  _striped((0.45, 0.3, 0.15), (0.3, 0.18, 0.08), 0.06, 1, seed=41))
-    parts += _box((-1.2, 0.1, 3.2), (-0.6, 0.6, 3.6),
-                  _striped((0.6, 0.1, 0.1), (0.8, 0.75, 0.6), 0.05, 1, seed=42))
+    parts += _box(
+        (-1.8, 0.6, 1.6),
+        (1.8, 0.7, 4.6),
+        _striped((0.45, 0.3, 0.15), (0.3, 0.18, 0.08), 0.06, 1, seed=41),
+    )
+    parts += _box(
+        (-1.2, 0.1, 3.2),
+        (-0.6, 0.6, 3.6),
+        _striped((0.6, 0.1, 0.1), (0.8, 0.75, 0.6), 0.05, 1, seed=42),
+    )
     parts += _box((-0.5, 0.3, 2.6), (0.2, 0.6, 3.1), _tiled(_WARM_PALETTE, 0.1, 0.05, seed=43))
     parts += _box((1.15, -0.75, 3.7), (1.55, -0.55, 4.1), _lamp(150.0, (1.0, 0.95, 0.8), seed=45))
-    parts += _box((1.3, -0.55, 3.85), (1.4, 0.6, 3.95),
-                  _matte(textured_color((0.1, 0.1, 0.1), scale=0.05, contrast=0.5, seed=46)))
+    parts += _box(
+        (1.3, -0.55, 3.85),
+        (1.4, 0.6, 3.95),
+        _matte(textured_color((0.1, 0.1, 0.1), scale=0.05, contrast=0.5, seed=46)),
+    )
     parts += [(Sphere((0.7, 0.25, 3.4), 0.35), _tiled(_COOL_PALETTE, 0.15, 0.7, seed=44))]
     lights = (PointLight((1.35, -0.45, 3.9), (3.0, 2.8, 2.3)),)
-    return _scene("lamp", parts, lights=lights, ambient=(0.003, 0.003, 0.004),
-                  background=(0.001,) * 3, camera_center=(0.0, -0.2, 0.0),
-                  target=(0.0, 0.3, 3.3), baseline=0.1)
+    return _scene(
+        "lamp",
+        parts,
+        lights=lights,
+        ambient=(0.003, 0.003, 0.004),
+        background=(0.001,) * 3,
+        camera_center=(0.0, -0.2, 0.0),
+        target=(0.0, 0.3, 3.3),
+        baseline=0.1,
+    )
 
 
 def corridor() -> Scene:
     """A long corridor with pillars and door frames, ending at a bright window."""
     sky = textured_color((0.75, 0.85, 1.0), scale=0.35, contrast=0.45, seed=57)
-    window = Material(albedo=textured_color((0.5,) * 3, scale=1.0, contrast=0.1, seed=56),
-                      emission=scaled(sky, 60.0))
+    window = Material(
+        albedo=textured_color((0.5,) * 3, scale=1.0, contrast=0.1, seed=56),
+        emission=scaled(sky, 60.0),
+    )
     walls = [
         _tiled(_COOL_PALETTE, 0.3, 0.05, seed=51, spots=0.3),
         _spotted((0.3, 0.28, 0.25), scale=0.2, contrast=0.6, seed=52),
@@ -165,16 +195,27 @@ def corridor() -> Scene:
     parts += _box((-0.05, -1.5, 13.9), (0.05, 1.2, 13.99), frame)
     parts += _box((-1.4, -0.3, 13.9), (1.4, -0.2, 13.99), frame)
     parts += _box((-0.4, 0.5, 2.2), (0.3, 1.2, 2.9), _tiled(_WARM_PALETTE, 0.12, 0.05, seed=63))
-    parts += [(Sphere((0.6, 0.85, 6.0), 0.35),
-               _striped((0.7, 0.6, 0.2), (0.1, 0.1, 0.3), 0.08, 0, seed=64))]
+    parts += [
+        (
+            Sphere((0.6, 0.85, 6.0), 0.35),
+            _striped((0.7, 0.6, 0.2), (0.1, 0.1, 0.3), 0.08, 0, seed=64),
+        )
+    ]
     lights = (
         PointLight((0.0, -0.2, 13.0), (40.0, 44.0, 50.0)),
         PointLight((0.0, -1.3, 2.0), (0.6, 0.55, 0.45)),
         PointLight((0.0, -1.3, 6.5), (0.8, 0.75, 0.6)),
     )
-    return _scene("corridor", parts, lights=lights, ambient=(0.002, 0.002, 0.0025),
-                  background=(0.001,) * 3, camera_center=(0.0, -0.1, 0.0),
-                  target=(0.0, -0.1, 7.0), baseline=0.1)
+    return _scene(
+        "corridor",
+        parts,
+        lights=lights,
+        ambient=(0.002, 0.002, 0.0025),
+        background=(0.001,) * 3,
+        camera_center=(0.0, -0.1, 0.0),
+        target=(0.0, -0.1, 7.0),
+        baseline=0.1,
+    )
 
 
 SCENES: dict[str, Callable[[], Scene]] = {"room": room, "lamp": lamp, "corridor": corridor}

@@ -44,8 +44,9 @@ def hash01(ix: np.ndarray, iy: np.ndarray, seed: int) -> np.ndarray:
 def _value_noise(uv: np.ndarray, seed: int) -> np.ndarray:
     cell = np.floor(uv)
     frac = (uv - cell).astype(np.float32)
-    across, down = frac[:, 0] * frac[:, 0] * (3 - 2 * frac[:, 0]), frac[:, 1] * frac[:, 1] * (
-        3 - 2 * frac[:, 1]
+    across, down = (
+        frac[:, 0] * frac[:, 0] * (3 - 2 * frac[:, 0]),
+        frac[:, 1] * frac[:, 1] * (3 - 2 * frac[:, 1]),
     )
     ix, iy = cell[:, 0].astype(np.int64), cell[:, 1].astype(np.int64)
     top = hash01(ix, iy, seed)

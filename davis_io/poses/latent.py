@@ -18,6 +18,7 @@ from davis_io.types import ColorFilter, Frame
 
 __all__ = ["ResponseCurve", "latent_images", "normalised_image", "sharpness"]
 
+
 @dataclass(frozen=True)
 class ResponseCurve:
     """A monotone camera response tabulated as pixel value against linear exposure.

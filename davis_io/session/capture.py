@@ -104,9 +104,7 @@ def _open_camera(request: CaptureRequest) -> PacketSource:
         raise DeviceError(f"{error}; {WITHOUT_CAMERA}") from error
 
 
-def record_capture(
-    request: CaptureRequest, out_dir: Path, **options
-) -> RecordingResult:
+def record_capture(request: CaptureRequest, out_dir: Path, **options) -> RecordingResult:
     """Open the requested source, record it into ``out_dir``, and save emulator truth.
 
     Args:

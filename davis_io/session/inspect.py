@@ -197,15 +197,21 @@ def _rewrite_h5(folder: Path, frames: int, events: int, manifest: SessionManifes
     """
     source_path, target_path = folder / H5_NAME, folder / f".{H5_NAME}.repair"
     try:
-        with h5py.File(source_path, "r", swmr=True) as source, h5py.File(
-            target_path, "w", libver="latest"
-        ) as target:
+        with (
+            h5py.File(source_path, "r", swmr=True) as source,
+            h5py.File(target_path, "w", libver="latest") as target,
+        ):
             for name in source:
                 source.copy(source[name], target, name=name)
             _trim(target, frames, events)
             if "image" not in target.require_group("frames"):
-                create_image_dataset(target, width=manifest.width, height=manifest.height,
-                                     image_dtype=np.uint16, bit_depth=10)
+                create_image_dataset(
+                    target,
+                    width=manifest.width,
+                    height=manifest.height,
+                    image_dtype=np.uint16,
+                    bit_depth=10,
+                )
     except OSError as error:
         target_path.unlink(missing_ok=True)
         raise SessionError(f"{source_path}: cannot repair ({error})") from error

@@ -288,8 +288,8 @@ def _describe_storage_error(error: OSError, folder: Path) -> str:
         free_mb = shutil.disk_usage(folder).free / 1e6
     except OSError:
         free_mb = float("nan")
-    full = error.errno == errno.ENOSPC or "No space left" in str(error) or "errno = 28" in str(
-        error
+    full = (
+        error.errno == errno.ENOSPC or "No space left" in str(error) or "errno = 28" in str(error)
     )
     if full:
         return (

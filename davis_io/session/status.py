@@ -101,7 +101,9 @@ def frame_warnings(index: int, frame: Frame, bins: ExposureBins) -> list[str]:
         fired = np.abs(bins.raw.astype(np.int32)).sum(axis=0)
         busy = float(np.mean(fired > BLUR_EVENTS_PER_BIN * b))
         if busy > BLUR_PIXEL_FRACTION:
-            warnings.append(f"{where}: blur too strong for b={b} bins ({busy:.0%} of pixels fired "
-                            f"> {BLUR_EVENTS_PER_BIN * b} events): use more bins, a shorter "
-                            "exposure or slower motion")
+            warnings.append(
+                f"{where}: blur too strong for b={b} bins ({busy:.0%} of pixels fired "
+                f"> {BLUR_EVENTS_PER_BIN * b} events): use more bins, a shorter "
+                "exposure or slower motion"
+            )
     return warnings

@@ -154,7 +154,10 @@ class SessionWriter:
         self._h5.close()
         self._h5 = h5py.File(self.path, "a", libver="latest", rdcc_nbytes=_CHUNK_CACHE_BYTES)
         create_image_dataset(
-            self._h5, width=self.width, height=self.height, image_dtype=image_dtype,
+            self._h5,
+            width=self.width,
+            height=self.height,
+            image_dtype=image_dtype,
             bit_depth=bit_depth,
         )
         self._enter_swmr()

@@ -14,8 +14,15 @@ __all__ = [
 ]
 
 
-def coarse_fine(coarse: int, fine: int, *, n_type: bool, enabled: bool = True,
-                cascode: bool = False, low_current: bool = False) -> int:
+def coarse_fine(
+    coarse: int,
+    fine: int,
+    *,
+    n_type: bool,
+    enabled: bool = True,
+    cascode: bool = False,
+    low_current: bool = False,
+) -> int:
     """Register value of a coarse/fine current bias.
 
     Args:
@@ -30,8 +37,14 @@ def coarse_fine(coarse: int, fine: int, *, n_type: bool, enabled: bool = True,
         16-bit value: bit 0 enabled, 1 sex N, 2 type normal, 3 level normal, 4-11 fine,
         12-14 coarse.
     """
-    return (int(enabled) | int(n_type) << 1 | int(not cascode) << 2 | int(not low_current) << 3
-            | fine << 4 | coarse << 12)
+    return (
+        int(enabled)
+        | int(n_type) << 1
+        | int(not cascode) << 2
+        | int(not low_current) << 3
+        | fine << 4
+        | coarse << 12
+    )
 
 
 def vdac(voltage: int, current: int) -> int:

@@ -31,8 +31,10 @@ _PIXEL_FILTER_SLOTS = 8
 def _check_range(owner: object, name: str, low: int, high: int, unit: str = "") -> None:
     value = getattr(owner, name)
     if not low <= value <= high:
-        raise UsageError(f"{type(owner).__name__}.{name} = {value}{unit} is out of range; "
-                         f"use {low}..{high}{unit}")
+        raise UsageError(
+            f"{type(owner).__name__}.{name} = {value}{unit} is out of range; "
+            f"use {low}..{high}{unit}"
+        )
 
 
 @dataclass(frozen=True)
@@ -160,8 +162,12 @@ def with_chip_biases(config: DavisConfig, facts: DeviceFacts) -> DavisConfig:
 def _chip_registers(config: DavisConfig, facts: DeviceFacts) -> list[RegisterWrite]:
     chip = [(Chip.DIGITALMUX0 + i, 0) for i in range(4)]
     chip += [(Chip.ANALOGMUX0 + i, 0) for i in range(3)]
-    chip += [(Chip.BIASMUX0, 0), (Chip.RESETCALIBNEURON, 1), (Chip.TYPENCALIBNEURON, 0),
-             (Chip.RESETTESTPIXEL, 1)]
+    chip += [
+        (Chip.BIASMUX0, 0),
+        (Chip.RESETCALIBNEURON, 1),
+        (Chip.TYPENCALIBNEURON, 0),
+        (Chip.RESETTESTPIXEL, 1),
+    ]
     if facts.is_davis240:
         chip.append((Chip.SPECIALPIXELCONTROL, 0))
     chip += [(Chip.AERNAROW, 0), (Chip.USEAOUT, 0)]
@@ -178,15 +184,19 @@ def _dvs_registers(dvs: DvsConfig, facts: DeviceFacts) -> list[RegisterWrite]:
     if facts.has_dvs_filters:
         columns, rows = facts.layout.dvs_columns, facts.layout.dvs_rows
         for slot in range(_PIXEL_FILTER_SLOTS):
-            writes += [(Dvs.FILTER_PIXEL_0_ROW + 2 * slot, rows),
-                       (Dvs.FILTER_PIXEL_0_ROW + 2 * slot + 1, columns)]
+            writes += [
+                (Dvs.FILTER_PIXEL_0_ROW + 2 * slot, rows),
+                (Dvs.FILTER_PIXEL_0_ROW + 2 * slot + 1, columns),
+            ]
         writes += [
             (Dvs.FILTER_BACKGROUND_ACTIVITY, int(dvs.background_activity_filter)),
             (Dvs.FILTER_BACKGROUND_ACTIVITY_TIME, dvs.background_activity_time_250us),
             (Dvs.FILTER_REFRACTORY_PERIOD, int(dvs.refractory_filter)),
             (Dvs.FILTER_REFRACTORY_PERIOD_TIME, dvs.refractory_time_250us),
-            (Dvs.FILTER_ROI_START_COLUMN, 0), (Dvs.FILTER_ROI_START_ROW, 0),
-            (Dvs.FILTER_ROI_END_COLUMN, columns - 1), (Dvs.FILTER_ROI_END_ROW, rows - 1),
+            (Dvs.FILTER_ROI_START_COLUMN, 0),
+            (Dvs.FILTER_ROI_START_ROW, 0),
+            (Dvs.FILTER_ROI_END_COLUMN, columns - 1),
+            (Dvs.FILTER_ROI_END_ROW, rows - 1),
             (Dvs.FILTER_SKIP_EVENTS, int(dvs.skip_events)),
             (Dvs.FILTER_SKIP_EVENTS_EVERY, dvs.skip_every),
             (Dvs.FILTER_POLARITY_FLATTEN, int(dvs.polarity_flatten)),
@@ -201,7 +211,8 @@ def _aps_registers(aps: ApsConfig, facts: DeviceFacts) -> list[RegisterWrite]:
     if facts.has_global_shutter:
         writes.append((Aps.GLOBAL_SHUTTER, int(aps.global_shutter)))
     writes += [
-        (Aps.START_COLUMN_0, 0), (Aps.START_ROW_0, 0),
+        (Aps.START_COLUMN_0, 0),
+        (Aps.START_ROW_0, 0),
         (Aps.END_COLUMN_0, facts.layout.aps_columns - 1),
         (Aps.END_ROW_0, facts.layout.aps_rows - 1),
         (Aps.EXPOSURE, round(aps.exposure_us * facts.adc_clock_mhz)),
@@ -211,8 +222,11 @@ def _aps_registers(aps: ApsConfig, facts: DeviceFacts) -> list[RegisterWrite]:
 
 
 def _imu_registers(imu: ImuConfig, facts: DeviceFacts) -> list[RegisterWrite]:
-    writes = [(Imu.SAMPLE_RATE_DIVIDER, imu.sample_rate_divider), (Imu.ACCEL_DLPF, imu.accel_dlpf),
-              (Imu.ACCEL_FULL_SCALE, imu.accel_full_scale)]
+    writes = [
+        (Imu.SAMPLE_RATE_DIVIDER, imu.sample_rate_divider),
+        (Imu.ACCEL_DLPF, imu.accel_dlpf),
+        (Imu.ACCEL_FULL_SCALE, imu.accel_full_scale),
+    ]
     if facts.layout.imu_type == 2:
         writes.append((Imu.GYRO_DLPF, imu.gyro_dlpf))
     writes.append((Imu.GYRO_FULL_SCALE, imu.gyro_full_scale))
@@ -226,16 +240,25 @@ def config_registers(config: DavisConfig, facts: DeviceFacts) -> list[RegisterWr
     delay. Times are converted with the device clocks: APS exposure and interval with the ADC
     clock, the pulse length with the logic clock, the early packet delay with the USB clock.
     """
-    mux = [(Module.MUX, Mux.TIMESTAMP_RESET, 0),
-           (Module.MUX, Mux.DROP_EXTINPUT_ON_TRANSFER_STALL, 1),
-           (Module.MUX, Mux.DROP_DVS_ON_TRANSFER_STALL, 1)]
-    extinput = [(ExtInput.DETECT_RISING_EDGES, 0), (ExtInput.DETECT_FALLING_EDGES, 0),
-                (ExtInput.DETECT_PULSES, 1), (ExtInput.DETECT_PULSE_POLARITY, 1),
-                (ExtInput.DETECT_PULSE_LENGTH, round(10 * facts.logic_clock_mhz))]
+    mux = [
+        (Module.MUX, Mux.TIMESTAMP_RESET, 0),
+        (Module.MUX, Mux.DROP_EXTINPUT_ON_TRANSFER_STALL, 1),
+        (Module.MUX, Mux.DROP_DVS_ON_TRANSFER_STALL, 1),
+    ]
+    extinput = [
+        (ExtInput.DETECT_RISING_EDGES, 0),
+        (ExtInput.DETECT_FALLING_EDGES, 0),
+        (ExtInput.DETECT_PULSES, 1),
+        (ExtInput.DETECT_PULSE_POLARITY, 1),
+        (ExtInput.DETECT_PULSE_LENGTH, round(10 * facts.logic_clock_mhz)),
+    ]
     delay = round(config.usb.early_packet_delay_125us * 125 * facts.usb_clock_mhz)
     return [
-        *_chip_registers(config, facts), *mux, *_dvs_registers(config.dvs, facts),
-        *_aps_registers(config.aps, facts), *_imu_registers(config.imu, facts),
+        *_chip_registers(config, facts),
+        *mux,
+        *_dvs_registers(config.dvs, facts),
+        *_aps_registers(config.aps, facts),
+        *_imu_registers(config.imu, facts),
         *[(Module.EXTINPUT, p, v) for p, v in extinput],
         (Module.USB, Usb.EARLY_PACKET_DELAY, delay),
     ]

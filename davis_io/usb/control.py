@@ -16,8 +16,13 @@ from davis_io.usb.protocol import (
 )
 from davis_io.usb.udev import install_hint
 
-__all__ = ["ControlPort", "DeviceDisconnected", "DevicePermissionError", "DeviceStalled",
-           "device_error"]
+__all__ = [
+    "ControlPort",
+    "DeviceDisconnected",
+    "DevicePermissionError",
+    "DeviceStalled",
+    "device_error",
+]
 
 _TIMEOUT_MS = 1000
 
@@ -41,11 +46,13 @@ def device_error(error: usb.core.USBError, what: str) -> DeviceError:
     if error.errno == errno.EPIPE:
         return DeviceStalled(f"{what}: endpoint stalled ({error}); close and reopen the camera")
     if error.errno == errno.EBUSY:
-        return DeviceError(f"{what}: the camera is in use by another program ({error}); "
-                           "close that program first")
+        return DeviceError(
+            f"{what}: the camera is in use by another program ({error}); close that program first"
+        )
     if error.errno in (errno.EACCES, errno.EPERM):
         return DevicePermissionError(
-            f"{what}: permission denied ({error}); allow access with:\n  {install_hint()}")
+            f"{what}: permission denied ({error}); allow access with:\n  {install_hint()}"
+        )
     return DeviceError(f"{what}: USB error ({error}); check the cable and reopen the camera")
 
 
@@ -60,13 +67,16 @@ class ControlPort:
         """Read one 32-bit parameter (0xBF IN, big-endian reply of exactly 4 bytes)."""
         with self._lock:
             try:
-                reply = self.device.ctrl_transfer(CONFIG_READ_REQUEST_TYPE, SINGLE_REQUEST,
-                                                  module, param, 4, _TIMEOUT_MS)
+                reply = self.device.ctrl_transfer(
+                    CONFIG_READ_REQUEST_TYPE, SINGLE_REQUEST, module, param, 4, _TIMEOUT_MS
+                )
             except usb.core.USBError as error:
                 raise device_error(error, f"reading parameter {module}/{param}") from error
         if len(reply) != 4:
-            raise DeviceError(f"reading parameter {module}/{param}: {len(reply)} bytes came back, "
-                              "4 expected; reopen the camera")
+            raise DeviceError(
+                f"reading parameter {module}/{param}: {len(reply)} bytes came back, "
+                "4 expected; reopen the camera"
+            )
         return int.from_bytes(bytes(reply), "big")
 
     def read64(self, module: int, param: int) -> int:
@@ -81,8 +91,14 @@ class ControlPort:
         """Write one 32-bit parameter (0xBF OUT, value big-endian)."""
         with self._lock:
             try:
-                self.device.ctrl_transfer(CONFIG_WRITE_REQUEST_TYPE, SINGLE_REQUEST, module, param,
-                                          value.to_bytes(4, "big"), _TIMEOUT_MS)
+                self.device.ctrl_transfer(
+                    CONFIG_WRITE_REQUEST_TYPE,
+                    SINGLE_REQUEST,
+                    module,
+                    param,
+                    value.to_bytes(4, "big"),
+                    _TIMEOUT_MS,
+                )
             except usb.core.USBError as error:
                 raise device_error(error, f"writing parameter {module}/{param}") from error
 
@@ -91,7 +107,13 @@ class ControlPort:
         payload = b"".join(bytes([m, p]) + v.to_bytes(4, "big") for m, p, v in writes)
         with self._lock:
             try:
-                self.device.ctrl_transfer(CONFIG_WRITE_REQUEST_TYPE, MULTI_WRITE_REQUEST,
-                                          len(writes), 0, payload, _TIMEOUT_MS)
+                self.device.ctrl_transfer(
+                    CONFIG_WRITE_REQUEST_TYPE,
+                    MULTI_WRITE_REQUEST,
+                    len(writes),
+                    0,
+                    payload,
+                    _TIMEOUT_MS,
+                )
             except usb.core.USBError as error:
                 raise device_error(error, f"multi-write of {len(writes)} parameters") from error

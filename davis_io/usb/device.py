@@ -21,23 +21,42 @@ from davis_io.usb.reader import StreamReader
 
 __all__ = ["DavisCamera", "open_camera"]
 
-_COLOR_FILTERS = [ColorFilter.MONO, ColorFilter.RGBG, ColorFilter.GRGB, ColorFilter.GBGR,
-                  ColorFilter.BGRG, ColorFilter.RGBW, ColorFilter.GRWB, ColorFilter.WBGR,
-                  ColorFilter.BWRG]
+_COLOR_FILTERS = [
+    ColorFilter.MONO,
+    ColorFilter.RGBG,
+    ColorFilter.GRGB,
+    ColorFilter.GBGR,
+    ColorFilter.BGRG,
+    ColorFilter.RGBW,
+    ColorFilter.GRWB,
+    ColorFilter.WBGR,
+    ColorFilter.BWRG,
+]
 """APS COLOR_FILTER register value -> pattern."""
 _PRODUCERS_OFF = [
-    (P.Module.DVS, P.Dvs.RUN), (P.Module.APS, P.Aps.RUN), (P.Module.IMU, P.Imu.RUN_ACCELEROMETER),
-    (P.Module.IMU, P.Imu.RUN_GYROSCOPE), (P.Module.IMU, P.Imu.RUN_TEMPERATURE),
-    (P.Module.EXTINPUT, P.ExtInput.RUN_DETECTOR), (P.Module.MUX, P.Mux.RUN),
-    (P.Module.MUX, P.Mux.TIMESTAMP_RUN), (P.Module.USB, P.Usb.RUN), (P.Module.MUX, P.Mux.RUN_CHIP),
+    (P.Module.DVS, P.Dvs.RUN),
+    (P.Module.APS, P.Aps.RUN),
+    (P.Module.IMU, P.Imu.RUN_ACCELEROMETER),
+    (P.Module.IMU, P.Imu.RUN_GYROSCOPE),
+    (P.Module.IMU, P.Imu.RUN_TEMPERATURE),
+    (P.Module.EXTINPUT, P.ExtInput.RUN_DETECTOR),
+    (P.Module.MUX, P.Mux.RUN),
+    (P.Module.MUX, P.Mux.TIMESTAMP_RUN),
+    (P.Module.USB, P.Usb.RUN),
+    (P.Module.MUX, P.Mux.RUN_CHIP),
 ]
 """dataStart step 1 and dataStop: everything off, in this order."""
 _PRODUCERS_ON = _PRODUCERS_OFF[:6]
 """dataStart step 7: DVS, APS, IMU accel/gyro/temperature, external-input detector."""
 
 
-def open_camera(serial: str | None = None, config: DavisConfig | None = None, *,
-                backend: usb.backend.IBackend | None = None, **options) -> DavisCamera:
+def open_camera(
+    serial: str | None = None,
+    config: DavisConfig | None = None,
+    *,
+    backend: usb.backend.IBackend | None = None,
+    **options,
+) -> DavisCamera:
     """Open the camera with ``serial`` (or the only one attached); use it as a context manager.
 
     Raises:
@@ -57,8 +76,16 @@ class DavisCamera:
     subclass after every complete packet was delivered when the camera is unplugged or stalls.
     """
 
-    def __init__(self, device: usb.core.Device, config: DavisConfig, *, queue_packets: int = 256,
-                 read_bytes: int = 131072, idle_s: float = 0.1, poll_s: float = 0.5):
+    def __init__(
+        self,
+        device: usb.core.Device,
+        config: DavisConfig,
+        *,
+        queue_packets: int = 256,
+        read_bytes: int = 131072,
+        idle_s: float = 0.1,
+        poll_s: float = 0.5,
+    ):
         self.device = device
         self.config = config
         self.idle_s, self.poll_s = idle_s, poll_s
@@ -109,12 +136,20 @@ class DavisCamera:
         if chip_id in P.DAVIS240_CHIP_IDS:
             layout = dataclasses.replace(layout, adc_doubling=True)
         deviation = read(P.Module.SYSINFO, P.SysInfo.CLOCK_DEVIATION) / 1000
-        flags = [read(P.Module.DVS, flag) for flag in (
-            P.Dvs.HAS_PIXEL_FILTER, P.Dvs.HAS_BACKGROUND_ACTIVITY_FILTER, P.Dvs.HAS_ROI_FILTER,
-            P.Dvs.HAS_SKIP_FILTER, P.Dvs.HAS_POLARITY_FILTER)]
+        flags = [
+            read(P.Module.DVS, flag)
+            for flag in (
+                P.Dvs.HAS_PIXEL_FILTER,
+                P.Dvs.HAS_BACKGROUND_ACTIVITY_FILTER,
+                P.Dvs.HAS_ROI_FILTER,
+                P.Dvs.HAS_SKIP_FILTER,
+                P.Dvs.HAS_POLARITY_FILTER,
+            )
+        ]
         self.color_register = read(P.Module.APS, P.Aps.COLOR_FILTER)
         return DeviceFacts(
-            layout=layout, chip_id=chip_id,
+            layout=layout,
+            chip_id=chip_id,
             logic_clock_mhz=read(P.Module.SYSINFO, P.SysInfo.LOGIC_CLOCK) * deviation,
             adc_clock_mhz=read(P.Module.SYSINFO, P.SysInfo.ADC_CLOCK) * deviation,
             usb_clock_mhz=read(P.Module.SYSINFO, P.SysInfo.USB_CLOCK) * deviation,
@@ -126,17 +161,27 @@ class DavisCamera:
     def _source_info(self) -> SourceInfo:
         facts = self.facts
         if self.color_register >= len(_COLOR_FILTERS):
-            raise DeviceError(f"DAVIS serial {self.serial}: unknown colour filter register "
-                              f"value {self.color_register}")
+            raise DeviceError(
+                f"DAVIS serial {self.serial}: unknown colour filter register "
+                f"value {self.color_register}"
+            )
         return SourceInfo(
-            camera=P.chip_name(facts.chip_id), serial=self.serial, width=facts.layout.width,
-            height=facts.layout.height, color_filter=_COLOR_FILTERS[self.color_register],
-            origin="usb", firmware_version=self.device.bcdDevice & 0xFF,
+            camera=P.chip_name(facts.chip_id),
+            serial=self.serial,
+            width=facts.layout.width,
+            height=facts.layout.height,
+            color_filter=_COLOR_FILTERS[self.color_register],
+            origin="usb",
+            firmware_version=self.device.bcdDevice & 0xFF,
             logic_version=self.logic_version,
-            extra={"logic_patch": self.logic_patch, "chip_id": facts.chip_id,
-                   "adc_clock_mhz": facts.adc_clock_mhz, "logic_clock_mhz": facts.logic_clock_mhz,
-                   "usb_clock_mhz": facts.usb_clock_mhz,
-                   "config": dataclasses.asdict(self.config)},
+            extra={
+                "logic_patch": self.logic_patch,
+                "chip_id": facts.chip_id,
+                "adc_clock_mhz": facts.adc_clock_mhz,
+                "logic_clock_mhz": facts.logic_clock_mhz,
+                "usb_clock_mhz": facts.usb_clock_mhz,
+                "config": dataclasses.asdict(self.config),
+            },
         )
 
     def configure(self, config: DavisConfig) -> list[tuple[int, int, int]]:
@@ -146,13 +191,15 @@ class DavisCamera:
             self.port.write(module, param, value)
         self._applied = self.config = with_chip_biases(config, self.facts)
         self.info = dataclasses.replace(
-            self.info, extra={**self.info.extra, "config": dataclasses.asdict(self.config)})
+            self.info, extra={**self.info.extra, "config": dataclasses.asdict(self.config)}
+        )
         return writes
 
     def timestamp_reset(self) -> None:
         """Reset the device clock (one multi-write: TIMESTAMP_RESET 1 then 0)."""
-        self.port.write_many([(P.Module.MUX, P.Mux.TIMESTAMP_RESET, 1),
-                              (P.Module.MUX, P.Mux.TIMESTAMP_RESET, 0)])
+        self.port.write_many(
+            [(P.Module.MUX, P.Mux.TIMESTAMP_RESET, 1), (P.Module.MUX, P.Mux.TIMESTAMP_RESET, 0)]
+        )
 
     def start(self) -> None:
         """Configure, then libcaer's dataStart: off, clear halt, read, chip, clocks, producers."""
@@ -167,8 +214,11 @@ class DavisCamera:
         self.reader.start()
         self.port.write(P.Module.MUX, P.Mux.RUN_CHIP, 1)
         time.sleep(0.200)
-        for module, param in ((P.Module.USB, P.Usb.RUN), (P.Module.MUX, P.Mux.TIMESTAMP_RUN),
-                              (P.Module.MUX, P.Mux.RUN)):
+        for module, param in (
+            (P.Module.USB, P.Usb.RUN),
+            (P.Module.MUX, P.Mux.TIMESTAMP_RUN),
+            (P.Module.MUX, P.Mux.RUN),
+        ):
             self.port.write(module, param, 1)
         time.sleep(0.050)
         for module, param in _PRODUCERS_ON:

@@ -12,11 +12,23 @@ from davis_io.errors import DeviceError
 from davis_io.usb import protocol as P
 from davis_io.usb.control import ControlPort, device_error
 
-__all__ = ["CameraListing", "check_versions", "choose_device", "default_backend", "find_devices",
-           "list_cameras", "read_serial"]
+__all__ = [
+    "CameraListing",
+    "check_versions",
+    "choose_device",
+    "default_backend",
+    "find_devices",
+    "list_cameras",
+    "read_serial",
+]
 
-_SPEEDS = {1: "low (1.5 Mbit/s)", 2: "full (12 Mbit/s)", 3: "high (480 Mbit/s)",
-           4: "super (5 Gbit/s)", 5: "super+ (10 Gbit/s)"}
+_SPEEDS = {
+    1: "low (1.5 Mbit/s)",
+    2: "full (12 Mbit/s)",
+    3: "high (480 Mbit/s)",
+    4: "super (5 Gbit/s)",
+    5: "super+ (10 Gbit/s)",
+}
 _MAX_SERIAL_CHARS = 8
 _GET_DESCRIPTOR_IN, _GET_DESCRIPTOR, _STRING_LANGUAGES = 0x80, 0x06, 0x0300
 """Standard request reading string descriptor 0 (the language list)."""
@@ -36,15 +48,16 @@ def default_backend() -> usb.backend.IBackend:
 
         backend = libusb_package.get_libusb1_backend()
     if backend is None:
-        raise DeviceError("no libusb-1.0 found: install it (apt install libusb-1.0-0) or "
-                          "reinstall the libusb-package Python package")
+        raise DeviceError(
+            "no libusb-1.0 found: install it (apt install libusb-1.0-0) or "
+            "reinstall the libusb-package Python package"
+        )
     return backend
 
 
 def find_devices(backend: usb.backend.IBackend | None = None) -> list[usb.core.Device]:
     """Every attached DAVIS (vendor 0x152A, product 0x841A or 0x841B)."""
-    found = usb.core.find(find_all=True, idVendor=P.VENDOR_ID,
-                          backend=backend or default_backend())
+    found = usb.core.find(find_all=True, idVendor=P.VENDOR_ID, backend=backend or default_backend())
     return [dev for dev in found if dev.idProduct in P.MIN_FIRMWARE]
 
 
@@ -64,8 +77,10 @@ def read_serial(device: usb.core.Device) -> str:
         _raise_string_error(device)
         raise DeviceError(f"reading the serial number: {error}") from error
     if len(serial) > _MAX_SERIAL_CHARS:
-        raise DeviceError(f"serial number {serial!r} is longer than {_MAX_SERIAL_CHARS} "
-                          "characters: not a DAVIS camera")
+        raise DeviceError(
+            f"serial number {serial!r} is longer than {_MAX_SERIAL_CHARS} "
+            "characters: not a DAVIS camera"
+        )
     return serial
 
 
@@ -92,16 +107,22 @@ def check_versions(device: usb.core.Device, port: ControlPort, serial: str) -> t
     where = f"DAVIS {board} board, serial {serial}"
     firmware, needed = firmware_version(device), P.MIN_FIRMWARE[device.idProduct]
     if firmware < needed:
-        raise DeviceError(f"{where}: firmware version {firmware} found, {needed} or newer needed; "
-                          "update it with iniVation's Flashy tool")
+        raise DeviceError(
+            f"{where}: firmware version {firmware} found, {needed} or newer needed; "
+            "update it with iniVation's Flashy tool"
+        )
     logic = port.read(P.Module.SYSINFO, P.SysInfo.LOGIC_VERSION)
     if logic != P.REQUIRED_LOGIC_VERSION:
-        raise DeviceError(f"{where}: logic version {logic} found, exactly "
-                          f"{P.REQUIRED_LOGIC_VERSION} needed; update it with iniVation's Flashy")
+        raise DeviceError(
+            f"{where}: logic version {logic} found, exactly "
+            f"{P.REQUIRED_LOGIC_VERSION} needed; update it with iniVation's Flashy"
+        )
     patch = port.read(P.Module.SYSINFO, P.SysInfo.LOGIC_PATCH)
     if patch < P.MIN_LOGIC_PATCH:
-        raise DeviceError(f"{where}: logic patch {patch} found, {P.MIN_LOGIC_PATCH} or newer "
-                          "needed; update it with iniVation's Flashy tool")
+        raise DeviceError(
+            f"{where}: logic patch {patch} found, {P.MIN_LOGIC_PATCH} or newer "
+            "needed; update it with iniVation's Flashy tool"
+        )
     return logic, patch
 
 
@@ -112,13 +133,16 @@ def choose_device(devices: list[usb.core.Device], serial: str | None) -> usb.cor
         DeviceError: none attached, no such serial, or several attached and no serial given.
     """
     if not devices:
-        raise DeviceError("no DAVIS camera found (USB 152a:841a or 152a:841b); plug one in, "
-                          "then check `seecap devices` and `seecap doctor`")
+        raise DeviceError(
+            "no DAVIS camera found (USB 152a:841a or 152a:841b); plug one in, "
+            "then check `seecap devices` and `seecap doctor`"
+        )
     if serial is None:
         if len(devices) > 1:
             serials = ", ".join(read_serial(dev) for dev in devices)
-            raise DeviceError(f"{len(devices)} DAVIS cameras attached ({serials}); choose one "
-                              "with --serial")
+            raise DeviceError(
+                f"{len(devices)} DAVIS cameras attached ({serials}); choose one with --serial"
+            )
         return devices[0]
     for device in devices:
         if read_serial(device)[:_MAX_SERIAL_CHARS] == serial[:_MAX_SERIAL_CHARS]:
@@ -183,6 +207,13 @@ def _describe(device: usb.core.Device) -> CameraListing:
     finally:
         usb.util.dispose_resources(device)
     return CameraListing(
-        model=facts["model"], serial=facts["serial"], firmware=firmware_version(device),
-        logic=facts["logic"], speed=_SPEEDS.get(device.speed or 0, "unknown"),
-        bus=device.bus, address=device.address, usable=not problem, problem=problem)
+        model=facts["model"],
+        serial=facts["serial"],
+        firmware=firmware_version(device),
+        logic=facts["logic"],
+        speed=_SPEEDS.get(device.speed or 0, "unknown"),
+        bus=device.bus,
+        address=device.address,
+        usable=not problem,
+        problem=problem,
+    )

@@ -44,9 +44,14 @@ def _camera_checks(backend: usb.backend.IBackend | None) -> list[Check]:
     cameras = list_cameras(backend)
     if not cameras:
         return [Check("cameras", True, "none attached (permissions checked when one is)")]
-    return [Check(f"camera {c.model} {c.serial or '?'} (bus {c.bus} address {c.address})",
-                  c.usable, "opens, versions supported" if c.usable else c.problem)
-            for c in cameras]
+    return [
+        Check(
+            f"camera {c.model} {c.serial or '?'} (bus {c.bus} address {c.address})",
+            c.usable,
+            "opens, versions supported" if c.usable else c.problem,
+        )
+        for c in cameras
+    ]
 
 
 def _udev_check(rules_dir: Path) -> Check:
@@ -60,8 +65,13 @@ def _udev_check(rules_dir: Path) -> Check:
 
 def _module_check(name: str, purpose: str) -> Check:
     found = importlib.util.find_spec(name) is not None
-    return Check(name, found, f"importable ({purpose})" if found else
-                 f"not importable; needed for {purpose}: pip install {name}")
+    return Check(
+        name,
+        found,
+        f"importable ({purpose})"
+        if found
+        else f"not importable; needed for {purpose}: pip install {name}",
+    )
 
 
 def _compute_check() -> Check:
@@ -79,8 +89,12 @@ def _disk_check(path: Path) -> Check:
     return Check("disk", True, detail)
 
 
-def run_checks(path: Path = Path("."), *, rules_dir: Path = RULES_DIR,
-               backend: usb.backend.IBackend | None = None) -> list[Check]:
+def run_checks(
+    path: Path = Path("."),
+    *,
+    rules_dir: Path = RULES_DIR,
+    backend: usb.backend.IBackend | None = None,
+) -> list[Check]:
     """Run every check; ``path`` is where sessions will be written.
 
     Args:

@@ -19,8 +19,9 @@ __all__ = ["MODELS", "RawUsbDump", "open_raw_usb_dump", "write_raw_usb_dump"]
 
 MODELS = {
     "davis346": SensorLayout(),
-    "davis240": SensorLayout(dvs_columns=240, dvs_rows=180, aps_columns=240, aps_rows=180,
-                             adc_doubling=True),
+    "davis240": SensorLayout(
+        dvs_columns=240, dvs_rows=180, aps_columns=240, aps_rows=180, adc_doubling=True
+    ),
 }
 """Sensor layout of each model name accepted by ``--raw-usb``."""
 
@@ -31,8 +32,9 @@ def _layout(model: str) -> SensorLayout:
     try:
         return MODELS[model.lower()]
     except KeyError:
-        raise UsageError(f"unknown camera model {model!r} for a raw USB dump; "
-                         f"use one of {', '.join(MODELS)}") from None
+        raise UsageError(
+            f"unknown camera model {model!r} for a raw USB dump; use one of {', '.join(MODELS)}"
+        ) from None
 
 
 class RawUsbDump:
@@ -45,9 +47,14 @@ class RawUsbDump:
         self.path = Path(path)
         self.layout = _layout(model)
         self.info = SourceInfo(
-            camera=model.upper(), serial="", width=self.layout.width, height=self.layout.height,
-            color_filter=color_filter, origin=f"replay:{self.path.name}",
-            extra={"format": "raw USB bulk-IN dump"})
+            camera=model.upper(),
+            serial="",
+            width=self.layout.width,
+            height=self.layout.height,
+            color_filter=color_filter,
+            origin=f"replay:{self.path.name}",
+            extra={"format": "raw USB bulk-IN dump"},
+        )
         self.decoder = WordDecoder(self.layout)
         self._file: BinaryIO | None = None
 
@@ -55,12 +62,17 @@ class RawUsbDump:
         try:
             self._file = self.path.open("rb")
         except OSError as error:
-            raise FormatError(f"cannot open raw USB dump: {error.strerror}",
-                              path=str(self.path)) from error
+            raise FormatError(
+                f"cannot open raw USB dump: {error.strerror}", path=str(self.path)
+            ) from error
         return self
 
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 tb: TracebackType | None) -> None:
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
         if self._file is not None:
             self._file.close()
             self._file = None
@@ -80,8 +92,9 @@ def open_raw_usb_dump(path: str | Path, model: str) -> PacketSource:
     return RawUsbDump(path, model)
 
 
-def write_raw_usb_dump(source: PacketSource, path: str | Path, *, model: str = "davis346",
-                       adc_clock_mhz: float = 30.0) -> int:
+def write_raw_usb_dump(
+    source: PacketSource, path: str | Path, *, model: str = "davis346", adc_clock_mhz: float = 30.0
+) -> int:
     """Encode every packet of ``source`` as a DAVIS would send it; return the bytes written.
 
     The dump starts with a timestamp reset (device time 0), 200 ms before the source's first
@@ -93,8 +106,9 @@ def write_raw_usb_dump(source: PacketSource, path: str | Path, *, model: str = "
         reset = np.array([Special.TIMESTAMP_RESET], "<u2").tobytes()
         file.write(reset)
         written += len(reset)
-        for chunk in SourceWords(source, layout, StreamFaults(), adc_clock_mhz=adc_clock_mhz,
-                                  accel_scale=1, gyro_scale=1):
+        for chunk in SourceWords(
+            source, layout, StreamFaults(), adc_clock_mhz=adc_clock_mhz, accel_scale=1, gyro_scale=1
+        ):
             data = chunk.words.astype("<u2", copy=False).tobytes()
             file.write(data)
             written += len(data)

@@ -33,29 +33,67 @@ class EmulatedBackend(usb.backend.IBackend):
 
     def get_device_descriptor(self, dev):  # noqa: D102
         return SimpleNamespace(
-            bLength=18, bDescriptorType=1, bcdUSB=0x0300, bDeviceClass=0, bDeviceSubClass=0,
-            bDeviceProtocol=0, bMaxPacketSize0=9, idVendor=P.VENDOR_ID, idProduct=dev.product_id,
-            bcdDevice=dev.firmware, iManufacturer=1, iProduct=2, iSerialNumber=3,
-            bNumConfigurations=1, address=dev.address, bus=1, port_number=dev.address,
-            port_numbers=(dev.address,), speed=usb.util.SPEED_SUPER)
+            bLength=18,
+            bDescriptorType=1,
+            bcdUSB=0x0300,
+            bDeviceClass=0,
+            bDeviceSubClass=0,
+            bDeviceProtocol=0,
+            bMaxPacketSize0=9,
+            idVendor=P.VENDOR_ID,
+            idProduct=dev.product_id,
+            bcdDevice=dev.firmware,
+            iManufacturer=1,
+            iProduct=2,
+            iSerialNumber=3,
+            bNumConfigurations=1,
+            address=dev.address,
+            bus=1,
+            port_number=dev.address,
+            port_numbers=(dev.address,),
+            speed=usb.util.SPEED_SUPER,
+        )
 
     def get_configuration_descriptor(self, dev, config):  # noqa: D102
         return SimpleNamespace(
-            bLength=9, bDescriptorType=2, wTotalLength=32, bNumInterfaces=1,
-            bConfigurationValue=P.USB_CONFIGURATION, iConfiguration=0, bmAttributes=0x80,
-            bMaxPower=112, extra_descriptors=[])
+            bLength=9,
+            bDescriptorType=2,
+            wTotalLength=32,
+            bNumInterfaces=1,
+            bConfigurationValue=P.USB_CONFIGURATION,
+            iConfiguration=0,
+            bmAttributes=0x80,
+            bMaxPower=112,
+            extra_descriptors=[],
+        )
 
     def get_interface_descriptor(self, dev, intf, alt, config):  # noqa: D102
         return SimpleNamespace(
-            bLength=9, bDescriptorType=4, bInterfaceNumber=P.INTERFACE, bAlternateSetting=0,
-            bNumEndpoints=2, bInterfaceClass=0xFF, bInterfaceSubClass=0, bInterfaceProtocol=0,
-            iInterface=0, extra_descriptors=[])
+            bLength=9,
+            bDescriptorType=4,
+            bInterfaceNumber=P.INTERFACE,
+            bAlternateSetting=0,
+            bNumEndpoints=2,
+            bInterfaceClass=0xFF,
+            bInterfaceSubClass=0,
+            bInterfaceProtocol=0,
+            iInterface=0,
+            extra_descriptors=[],
+        )
 
     def get_endpoint_descriptor(self, dev, ep, intf, alt, config):  # noqa: D102
         address, attributes, size = ((P.BULK_IN_ENDPOINT, 2, 1024), (0x81, 3, 64))[ep]
         return SimpleNamespace(
-            bLength=7, bDescriptorType=5, bEndpointAddress=address, bmAttributes=attributes,
-            wMaxPacketSize=size, bInterval=0, bRefresh=0, bSynchAddress=0, extra_descriptors=[])
+            bLength=7,
+            bDescriptorType=5,
+            bEndpointAddress=address,
+            bmAttributes=attributes,
+            wMaxPacketSize=size,
+            bInterval=0,
+            bRefresh=0,
+            bSynchAddress=0,
+            extra_descriptors=[],
+        )
 
     def open_device(self, dev):  # noqa: D102
         if not dev.connected:
@@ -104,8 +142,16 @@ class EmulatedBackend(usb.backend.IBackend):
         buff[: len(data)] = array.array("B", data)
         return len(data)
 
-    def ctrl_transfer(self, dev_handle, bmRequestType, bRequest, wValue, wIndex, data,  # noqa: D102, N803
-                      timeout):
+    def ctrl_transfer(
+        self,
+        dev_handle,
+        bmRequestType,
+        bRequest,
+        wValue,
+        wIndex,
+        data,  # noqa: D102, N803
+        timeout,
+    ):
         if not dev_handle.connected:
             raise usb_error("gone")
         if bmRequestType == 0x80 and bRequest == _GET_DESCRIPTOR:
@@ -118,8 +164,10 @@ class EmulatedBackend(usb.backend.IBackend):
             return len(data)
         if bmRequestType == P.CONFIG_WRITE_REQUEST_TYPE and bRequest == P.MULTI_WRITE_REQUEST:
             raw = bytes(data)
-            entries = [(raw[i], raw[i + 1], int.from_bytes(raw[i + 2 : i + 6], "big"))
-                       for i in range(0, 6 * wValue, 6)]
+            entries = [
+                (raw[i], raw[i + 1], int.from_bytes(raw[i + 2 : i + 6], "big"))
+                for i in range(0, 6 * wValue, 6)
+            ]
             dev_handle.write_registers(bRequest, entries)
             return len(data)
         raise usb.core.USBError("Pipe error (request not supported)", -9, errno.EPIPE)

@@ -27,8 +27,13 @@ _USB_ERRORS = {
     "access": ("Access denied (insufficient permissions)", -3, errno.EACCES),
     "busy": ("Resource busy", -6, errno.EBUSY),
 }
-_COLOR_FILTER_REGISTER = {ColorFilter.MONO: 0, ColorFilter.RGBG: 1, ColorFilter.GRGB: 2,
-                          ColorFilter.GBGR: 3, ColorFilter.BGRG: 4}
+_COLOR_FILTER_REGISTER = {
+    ColorFilter.MONO: 0,
+    ColorFilter.RGBG: 1,
+    ColorFilter.GRGB: 2,
+    ColorFilter.GBGR: 3,
+    ColorFilter.BGRG: 4,
+}
 
 
 @dataclass(frozen=True)
@@ -72,8 +77,13 @@ def _default_registers(color_filter: ColorFilter) -> dict[tuple[int, int], int]:
         (P.Module.MUX, P.Mux.HAS_STATISTICS): 1,
         (P.Module.DVS, P.Dvs.HAS_STATISTICS): 1,
     }
-    for flag in (P.Dvs.HAS_PIXEL_FILTER, P.Dvs.HAS_BACKGROUND_ACTIVITY_FILTER, P.Dvs.HAS_ROI_FILTER,
-                 P.Dvs.HAS_SKIP_FILTER, P.Dvs.HAS_POLARITY_FILTER):
+    for flag in (
+        P.Dvs.HAS_PIXEL_FILTER,
+        P.Dvs.HAS_BACKGROUND_ACTIVITY_FILTER,
+        P.Dvs.HAS_ROI_FILTER,
+        P.Dvs.HAS_SKIP_FILTER,
+        P.Dvs.HAS_POLARITY_FILTER,
+    ):
         regs[(P.Module.DVS, flag)] = 1
     return regs
 
@@ -203,12 +213,19 @@ class EmulatedDavis346:
             self._producer = self.chunks
         elif self.source is not None:
             reg = self.registers
-            adc = reg[(P.Module.SYSINFO, P.SysInfo.ADC_CLOCK)] * reg[
-                (P.Module.SYSINFO, P.SysInfo.CLOCK_DEVIATION)] / 1000
+            adc = (
+                reg[(P.Module.SYSINFO, P.SysInfo.ADC_CLOCK)]
+                * reg[(P.Module.SYSINFO, P.SysInfo.CLOCK_DEVIATION)]
+                / 1000
+            )
             self._producer = SourceWords(
-                self.source, self.layout(), self.faults, adc_clock_mhz=adc,
+                self.source,
+                self.layout(),
+                self.faults,
+                adc_clock_mhz=adc,
                 accel_scale=reg[(P.Module.IMU, P.Imu.ACCEL_FULL_SCALE)],
-                gyro_scale=reg[(P.Module.IMU, P.Imu.GYRO_FULL_SCALE)])
+                gyro_scale=reg[(P.Module.IMU, P.Imu.GYRO_FULL_SCALE)],
+            )
         self._exhausted = self._producer is None
 
     def _streaming(self) -> bool:
@@ -270,8 +287,10 @@ class EmulatedDavis346:
 
     def _apply_cut(self, size: int) -> int:
         """Shrink a transfer so it ends exactly where a stall or disconnect is due; raise there."""
-        for limit, kind in ((self.faults.stall_after_bytes, "stall"),
-                            (self.faults.disconnect_after_bytes, "gone")):
+        for limit, kind in (
+            (self.faults.stall_after_bytes, "stall"),
+            (self.faults.disconnect_after_bytes, "gone"),
+        ):
             if limit is None:
                 continue
             if self.bytes_delivered >= limit:

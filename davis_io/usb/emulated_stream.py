@@ -81,11 +81,25 @@ class SourceWords:
     known once the first chunk was produced.
     """
 
-    def __init__(self, source: PacketSource, layout: SensorLayout, faults: StreamFaults, *,
-                 adc_clock_mhz: float, accel_scale: int, gyro_scale: int, lead_us: int = 200_000):
+    def __init__(
+        self,
+        source: PacketSource,
+        layout: SensorLayout,
+        faults: StreamFaults,
+        *,
+        adc_clock_mhz: float,
+        accel_scale: int,
+        gyro_scale: int,
+        lead_us: int = 200_000,
+    ):
         self.time_origin_us: int | None = None
-        self._chunks = self._generate(source, layout, faults, lead_us, dict(
-            adc_clock_mhz=adc_clock_mhz, accel_scale=accel_scale, gyro_scale=gyro_scale))
+        self._chunks = self._generate(
+            source,
+            layout,
+            faults,
+            lead_us,
+            dict(adc_clock_mhz=adc_clock_mhz, accel_scale=accel_scale, gyro_scale=gyro_scale),
+        )
 
     def __iter__(self) -> Iterator[StreamChunk]:
         return self
@@ -110,8 +124,12 @@ class SourceWords:
         self.time_origin_us = first - lead_us - faults.device_start_us
         bounds = [first - lead_us, *sorted(faults.reset_at_us)]
         encoders = [
-            StreamEncoder(layout, time_origin_us=self.time_origin_us if i == 0 else start,
-                          end_us=bounds[i + 1] if i + 1 < len(bounds) else None, **options)
+            StreamEncoder(
+                layout,
+                time_origin_us=self.time_origin_us if i == 0 else start,
+                end_us=bounds[i + 1] if i + 1 < len(bounds) else None,
+                **options,
+            )
             for i, start in enumerate(bounds)
         ]
         yield from _segments(encoders, bounds, _chain(pending, packets), faults)
@@ -165,8 +183,9 @@ def _after(packet: Packet, start_us: int) -> Packet:
     )
 
 
-def _close(encoder: StreamEncoder, held: list[np.ndarray], reset_us: int | None,
-           first_us: int) -> StreamChunk:
+def _close(
+    encoder: StreamEncoder, held: list[np.ndarray], reset_us: int | None, first_us: int
+) -> StreamChunk:
     parts = [*held, encoder.flush()]
     if reset_us is not None:
         parts.append(encoder.timestamp_reset_words(reset_us))

@@ -52,11 +52,15 @@ def frame_words(frame: Frame, layout: SensorLayout, exposure_cycles: int) -> dic
         column; frame end.
     """
     if layout.adc_doubling:
-        raise UsageError("cannot encode frames for a DAVIS240 layout: its doubled ADC samples "
-                         "cannot carry odd pixel values; encode as a DAVIS346")
+        raise UsageError(
+            "cannot encode frames for a DAVIS240 layout: its doubled ADC samples "
+            "cannot carry odd pixel values; encode as a DAVIS346"
+        )
     if frame.bit_depth > 10 or frame.image.ndim != 2:
-        raise UsageError(f"cannot encode a frame of depth {frame.bit_depth} and shape "
-                         f"{frame.image.shape}: DAVIS frames are 2-D with at most 10 bits")
+        raise UsageError(
+            f"cannot encode a frame of depth {frame.bit_depth} and shape "
+            f"{frame.image.shape}: DAVIS frames are 2-D with at most 10 bits"
+        )
     height, width = frame.image.shape
     x0, y0 = frame.position
     values = frame.image.astype(np.uint16) << (10 - frame.bit_depth)
@@ -136,9 +140,17 @@ class StreamEncoder:
     ``end_us`` (a timestamp reset) are left out, so a frame running past it stays incomplete.
     """
 
-    def __init__(self, layout: SensorLayout, *, time_origin_us: int, adc_clock_mhz: float = 30.0,
-                 accel_scale: int = 1, gyro_scale: int = 1, hold_us: int = 200_000,
-                 end_us: int | None = None):
+    def __init__(
+        self,
+        layout: SensorLayout,
+        *,
+        time_origin_us: int,
+        adc_clock_mhz: float = 30.0,
+        accel_scale: int = 1,
+        gyro_scale: int = 1,
+        hold_us: int = 200_000,
+        end_us: int | None = None,
+    ):
         self.layout = layout
         self.time_origin_us = time_origin_us
         self.adc_clock_mhz = adc_clock_mhz
@@ -199,11 +211,13 @@ class StreamEncoder:
             self._block(frame.readout_end_us, words["eof"])
             self.stats.frames += 1
         for sample in packet.imu:
-            self._block(int(sample["t"]), imu_words(sample, self.layout, self.accel_scale,
-                                                     self.gyro_scale))
+            self._block(
+                int(sample["t"]), imu_words(sample, self.layout, self.accel_scale, self.gyro_scale)
+            )
             self.stats.imu_samples += 1
-        for t_us, kind in zip(packet.triggers["t"].tolist(), packet.triggers["kind"].tolist(),
-                              strict=True):
+        for t_us, kind in zip(
+            packet.triggers["t"].tolist(), packet.triggers["kind"].tolist(), strict=True
+        ):
             if kind in _TRIGGER_SPECIALS:
                 self._block(t_us, np.array([_TRIGGER_SPECIALS[kind]], dtype=np.uint16))
                 self.stats.triggers += 1
@@ -264,4 +278,3 @@ class StreamEncoder:
         self._time_us, self._row = int(t[-1]), int(rows[-1])
         self.stats.events += n
         return out
-

@@ -47,8 +47,9 @@ class StreamReader:
     a USB error ends the thread and is raised by :meth:`next_packet` once the queue is empty.
     """
 
-    def __init__(self, device: usb.core.Device, layout: SensorLayout, queue_packets: int,
-                 read_bytes: int):
+    def __init__(
+        self, device: usb.core.Device, layout: SensorLayout, queue_packets: int, read_bytes: int
+    ):
         self.device = device
         self.decoder = WordDecoder(layout)
         self.stats = QueueStats()

@@ -32,8 +32,9 @@ def rules_text() -> str:
     try:
         return SHIPPED_RULES.read_text(encoding="utf-8")
     except OSError as error:
-        raise DavisIOError(f"cannot read the udev rule file {SHIPPED_RULES}: {error}; "
-                           "reinstall seecap") from error
+        raise DavisIOError(
+            f"cannot read the udev rule file {SHIPPED_RULES}: {error}; reinstall seecap"
+        ) from error
 
 
 def installed_rule_path(rules_dir: Path = RULES_DIR) -> Path | None:
@@ -70,17 +71,23 @@ def install_rules(rules_dir: Path = RULES_DIR, *, run=subprocess.run) -> list[li
     try:
         target.write_text(rules_text(), encoding="utf-8")
     except OSError as error:
-        raise DavisIOError(f"cannot write {target}: {error.strerror}; is udev installed?"
-                           ) from error
-    commands = [["udevadm", "control", "--reload-rules"],
-                ["udevadm", "trigger", "--subsystem-match=usb", "--attr-match=idVendor=152a"]]
+        raise DavisIOError(
+            f"cannot write {target}: {error.strerror}; is udev installed?"
+        ) from error
+    commands = [
+        ["udevadm", "control", "--reload-rules"],
+        ["udevadm", "trigger", "--subsystem-match=usb", "--attr-match=idVendor=152a"],
+    ]
     for command in commands:
         try:
             result = run(command, check=False, capture_output=True, text=True)
         except OSError as error:
-            raise DavisIOError(f"cannot run {command[0]}: {error.strerror}; is udev installed?"
-                               ) from error
+            raise DavisIOError(
+                f"cannot run {command[0]}: {error.strerror}; is udev installed?"
+            ) from error
         if result.returncode != 0:
-            raise DavisIOError(f"{shlex.join(command)} failed ({result.returncode}): "
-                               f"{result.stderr.strip()}; re-plug the camera after fixing udev")
+            raise DavisIOError(
+                f"{shlex.join(command)} failed ({result.returncode}): "
+                f"{result.stderr.strip()}; re-plug the camera after fixing udev"
+            )
     return commands

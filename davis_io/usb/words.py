@@ -340,5 +340,6 @@ class _Output:
         triggers = np.array(self.triggers, dtype=TRIGGER_DTYPE)
         if not len(events):
             events = np.empty(0, dtype=EVENT_DTYPE)
-        return Packet(events=events, frames=self.frames, imu=imu, triggers=triggers,
-                      notes=self.notes)
+        return Packet(
+            events=events, frames=self.frames, imu=imu, triggers=triggers, notes=self.notes
+        )

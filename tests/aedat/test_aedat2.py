@@ -7,48 +7,75 @@ from davis_io.aedat import Aedat2Reader, open_recording
 from davis_io.aedat.aedat2 import RECORD_DTYPE, Aedat2Decoder
 from davis_io.errors import FormatError
 
-HEADER = (b"#!AER-DAT2.0\r\n# This is a raw AE data file - do not edit\r\n"
-          b"# AEChip: eu.seebetter.ini.chips.davis.Davis346B\r\n#End Of ASCII Header\r\n")
+HEADER = (
+    b"#!AER-DAT2.0\r\n# This is a raw AE data file - do not edit\r\n"
+    b"# AEChip: eu.seebetter.ini.chips.davis.Davis346B\r\n#End Of ASCII Header\r\n"
+)
 
 # Records: big-endian int32 address, int32 timestamp. DAVIS346: W = 346, H = 260.
 DVS_AND_EXTERNAL = bytes.fromhex(
     # (x=0, y=0) ON: X field 345 (0x159 << 12 = 0x159000), Y field 259 (0x103 << 22 = 0x40C00000),
     # polarity bit 11 (0x800) -> 0x40D59800
-    "40d59800" "0000000a"
+    "40d59800"
+    "0000000a"
     # (x=345, y=259) OFF: X field 0, Y field 0 -> 0x00000000
-    "00000000" "0000000b"
+    "00000000"
+    "0000000b"
     # (x=100, y=200) ON: X field 245 (0xF5000), Y field 59 (0x0EC00000), 0x800 -> 0x0ECF5800
-    "0ecf5800" "0000000c"
+    "0ecf5800"
+    "0000000c"
     # external input: bit 10 set, kind 3 rising / 2 falling / 4 pulse
-    "00000403" "00000014"
-    "00000402" "00000015"
-    "00000404" "00000016"
+    "00000403"
+    "00000014"
+    "00000402"
+    "00000015"
+    "00000404"
+    "00000016"
 )
 # IMU: 0x80000C00 | type << 28 | (value & 0xFFFF) << 12, seven records at the same time (30 µs).
 IMU = bytes.fromhex(
-    "81000c00" "0000001e"  # type 0 accel X = 4096
-    "9f000c00" "0000001e"  # type 1 accel Y = -4096 (0xF000)
-    "a0800c00" "0000001e"  # type 2 accel Z = 2048
-    "b0154c00" "0000001e"  # type 3 temperature raw 340 (0x154)
-    "c1000c00" "0000001e"  # type 4 gyro X = 4096
-    "d8000c00" "0000001e"  # type 5 gyro Y = -32768 (0x8000)
-    "e0000c00" "0000001e"  # type 6 gyro Z = 0
+    "81000c00"
+    "0000001e"  # type 0 accel X = 4096
+    "9f000c00"
+    "0000001e"  # type 1 accel Y = -4096 (0xF000)
+    "a0800c00"
+    "0000001e"  # type 2 accel Z = 2048
+    "b0154c00"
+    "0000001e"  # type 3 temperature raw 340 (0x154)
+    "c1000c00"
+    "0000001e"  # type 4 gyro X = 4096
+    "d8000c00"
+    "0000001e"  # type 5 gyro Y = -32768 (0x8000)
+    "e0000c00"
+    "0000001e"  # type 6 gyro Z = 0
 )
 # APS on a 3 x 2 array: 0x80000000 | Y field << 22 | X field << 12 | readout << 10 | sample,
 # X field = x, Y field = 1 - y. Reset reads (readout 0) at 100..150 µs, signal reads at 400..450.
 APS_3X2 = bytes.fromhex(
-    "80400258" "00000064"  # reset (0,0) = 600, first pixel: start of frame, 100
-    "8040112c" "0000006e"  # reset (1,0) = 300 (< 384: saturated)
-    "80402258" "00000078"  # reset (2,0) = 600
-    "80000258" "00000082"  # reset (0,1) = 600
-    "80001258" "0000008c"  # reset (1,1) = 600
-    "80002258" "00000096"  # reset (2,1) = 600, last reset pixel: start of exposure, 150
-    "80400464" "00000190"  # signal (0,0) = 100, first signal pixel: end of exposure, 400
-    "80401432" "0000019a"  # signal (1,0) = 50
-    "80402400" "000001a4"  # signal (2,0) = 0 (saturated)
-    "800006bc" "000001ae"  # signal (0,1) = 700 (600 - 700 clamps to 0)
-    "800014c8" "000001b8"  # signal (1,1) = 200
-    "80002657" "000001c2"  # signal (2,1) = 599, last pixel: end of frame, 450
+    "80400258"
+    "00000064"  # reset (0,0) = 600, first pixel: start of frame, 100
+    "8040112c"
+    "0000006e"  # reset (1,0) = 300 (< 384: saturated)
+    "80402258"
+    "00000078"  # reset (2,0) = 600
+    "80000258"
+    "00000082"  # reset (0,1) = 600
+    "80001258"
+    "0000008c"  # reset (1,1) = 600
+    "80002258"
+    "00000096"  # reset (2,1) = 600, last reset pixel: start of exposure, 150
+    "80400464"
+    "00000190"  # signal (0,0) = 100, first signal pixel: end of exposure, 400
+    "80401432"
+    "0000019a"  # signal (1,0) = 50
+    "80402400"
+    "000001a4"  # signal (2,0) = 0 (saturated)
+    "800006bc"
+    "000001ae"  # signal (0,1) = 700 (600 - 700 clamps to 0)
+    "800014c8"
+    "000001b8"  # signal (1,1) = 200
+    "80002657"
+    "000001c2"  # signal (2,1) = 599, last pixel: end of frame, 450
 )
 
 
@@ -83,8 +110,10 @@ def test_imu_sample_uses_jaer_default_scale(tmp_path):
 
 
 def test_imu_scale_from_header_preferences(tmp_path):
-    preferences = (b'#<entry key="ImuAccelScale" value="ImuAccelScaleG2"/>\r\n'
-                   b'#<entry key="ImuGyroScale" value="GyroFullScaleDegPerSec250"/>\r\n')
+    preferences = (
+        b'#<entry key="ImuAccelScale" value="ImuAccelScaleG2"/>\r\n'
+        b'#<entry key="ImuGyroScale" value="GyroFullScaleDegPerSec250"/>\r\n'
+    )
     header = HEADER.replace(b"#End", preferences + b"#End")
     _, (packet,) = _read(tmp_path, IMU, header=header)
     # ±2 g: 16384 LSB/g; ±250 deg/s: 131.072 LSB/(deg/s)
@@ -119,14 +148,14 @@ def test_aps_frame_split_across_pieces_and_davis240_gain():
 
 def test_incomplete_frame_is_dropped_with_a_note():
     decoder = Aedat2Decoder(3, 2)
-    missing = APS_3X2[:8 * 4] + APS_3X2[8 * 5:]  # reset read of (1,1) lost
+    missing = APS_3X2[: 8 * 4] + APS_3X2[8 * 5 :]  # reset read of (1,1) lost
     with pytest.warns(UserWarning, match="incomplete"):
         packet = decoder.decode(_records(missing))
     assert packet.frames == [] and "incomplete" in packet.notes[0]
 
 
 def test_timestamp_wrap_is_unwrapped():
-    records = bytes.fromhex("00000000" "fffffffe" "00000000" "00000005")
+    records = bytes.fromhex("00000000fffffffe0000000000000005")
     packet = Aedat2Decoder(346, 260).decode(_records(records))
     assert packet.events["t"].tolist() == [0xFFFFFFFE, (1 << 32) + 5]
 

@@ -47,7 +47,10 @@ def test_summary_reports_the_fixture_readme_facts(aestream_aedat4):
     assert summary.frames.count == 3
     assert summary.frame_shapes == ["uint8 gray 260 x 346 (8-bit)"]
     assert summary.frame_exposure_starts_us == [
-        1633953690976518, 1633953691016518, 1633953691056518]
+        1633953690976518,
+        1633953691016518,
+        1633953691056518,
+    ]
     assert summary.frame_exposures_us == [4773, 4773, 4773]
     assert min(summary.frame_readouts_us) == 23_652
     assert summary.imu.count == 130
@@ -55,8 +58,12 @@ def test_summary_reports_the_fixture_readme_facts(aestream_aedat4):
     assert summary.imu_rate_hz == pytest.approx(1000, rel=1e-3)
     assert summary.imu_mean_temperature_c == pytest.approx(27.8, abs=0.05)
     assert summary.triggers.count == 15
-    assert summary.trigger_kinds == {"APS_FRAME_START": 3, "APS_FRAME_END": 4,
-                                     "APS_EXPOSURE_START": 4, "APS_EXPOSURE_END": 4}
+    assert summary.trigger_kinds == {
+        "APS_FRAME_START": 3,
+        "APS_FRAME_END": 4,
+        "APS_EXPOSURE_START": 4,
+        "APS_EXPOSURE_END": 4,
+    }
     assert summary.time_range_us == [1633953690967091, 1633953691110744]
     assert summary.gaps == [] and summary.notes == []
 
@@ -79,9 +86,11 @@ def test_decoded_records_equal_dv_processing(aestream_aedat4):
     assert len(imu) == len(dv_imu) == 130
     np.testing.assert_array_equal(imu["t"], [s.timestamp for s in dv_imu])
     np.testing.assert_array_equal(
-        imu["acc_g"], [[s.accelerometerX, s.accelerometerY, s.accelerometerZ] for s in dv_imu])
+        imu["acc_g"], [[s.accelerometerX, s.accelerometerY, s.accelerometerZ] for s in dv_imu]
+    )
     np.testing.assert_array_equal(
-        imu["gyro_dps"], [[s.gyroscopeX, s.gyroscopeY, s.gyroscopeZ] for s in dv_imu])
+        imu["gyro_dps"], [[s.gyroscopeX, s.gyroscopeY, s.gyroscopeZ] for s in dv_imu]
+    )
     np.testing.assert_array_equal(imu["temperature_c"], [s.temperature for s in dv_imu])
     np.testing.assert_array_equal(triggers["t"], [t.timestamp for t in dv_triggers])
     np.testing.assert_array_equal(triggers["kind"], [int(t.type) for t in dv_triggers])

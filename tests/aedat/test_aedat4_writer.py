@@ -24,8 +24,14 @@ def _events(rng, n, t0):
 def _frame(rng, dtype, t0, bit_depth, channels=1):
     shape = (260, 346) if channels == 1 else (260, 346, channels)
     image = rng.integers(0, 1 << bit_depth, shape).astype(dtype)
-    return Frame(image=image, exposure_start_us=t0 + 9_000, exposure_end_us=t0 + 13_773,
-                 readout_start_us=t0, readout_end_us=t0 + 23_652, bit_depth=bit_depth)
+    return Frame(
+        image=image,
+        exposure_start_us=t0 + 9_000,
+        exposure_end_us=t0 + 13_773,
+        readout_start_us=t0,
+        readout_end_us=t0 + 23_652,
+        bit_depth=bit_depth,
+    )
 
 
 def _imu(rng, n, t0):
@@ -48,10 +54,17 @@ def _packets(seed=7, dtype=np.uint16, bit_depth=10):
     rng = np.random.default_rng(seed)
     t0 = 1_700_000_000_000_000
     return [
-        Packet(events=_events(rng, 5000, t0), frames=[_frame(rng, dtype, t0, bit_depth)],
-               imu=_imu(rng, 20, t0), triggers=_triggers(t0)),
-        Packet(events=_events(rng, 3000, t0 + 50_000),
-               frames=[_frame(rng, dtype, t0 + 40_000, bit_depth)], imu=_imu(rng, 20, t0 + 20_000)),
+        Packet(
+            events=_events(rng, 5000, t0),
+            frames=[_frame(rng, dtype, t0, bit_depth)],
+            imu=_imu(rng, 20, t0),
+            triggers=_triggers(t0),
+        ),
+        Packet(
+            events=_events(rng, 3000, t0 + 50_000),
+            frames=[_frame(rng, dtype, t0 + 40_000, bit_depth)],
+            imu=_imu(rng, 20, t0 + 20_000),
+        ),
     ]
 
 
@@ -105,8 +118,9 @@ def test_written_file_opens_in_dv_processing_with_same_content(tmp_path):
         imu += batch
     ours_imu = _concat(packets, "imu")
     np.testing.assert_array_equal([s.timestamp for s in imu], ours_imu["t"])
-    np.testing.assert_array_equal([[s.gyroscopeX, s.gyroscopeY, s.gyroscopeZ] for s in imu],
-                                  ours_imu["gyro_dps"])
+    np.testing.assert_array_equal(
+        [[s.gyroscopeX, s.gyroscopeY, s.gyroscopeZ] for s in imu], ours_imu["gyro_dps"]
+    )
     np.testing.assert_array_equal([s.temperature for s in imu], ours_imu["temperature_c"])
     triggers = recording.getNextTriggerBatch()
     assert [(t.timestamp, int(t.type)) for t in triggers] == _concat(packets, "triggers").tolist()
@@ -137,7 +151,9 @@ def test_data_table_rows_point_at_payloads(tmp_path):
         assert len(rows) == 7
         for row in rows:  # DV convention: ByteOffset is the payload, header 8 bytes before it
             assert np.frombuffer(data[row.byte_offset - 8 : row.byte_offset], "<i4").tolist() == [
-                row.stream_id, row.size]
+                row.stream_id,
+                row.size,
+            ]
         assert rows[0].num_elements == 5000
         assert reader.time_range[0] == 1_700_000_000_000_000
 

@@ -36,11 +36,14 @@ def _packet(stream_id, payload):
 EVENTS = StreamDescription(0, "EVTS", "events", 346, 260, "DAVIS346_1")
 
 
-@pytest.mark.parametrize("start, match", [
-    (b"", "empty file"),
-    (b"hello world\r\n", "not an AEDAT header"),
-    (b"#!AER-DAT3.0\r\n#!END-HEADER\r\n", "version '3.0' is not supported"),
-])
+@pytest.mark.parametrize(
+    "start, match",
+    [
+        (b"", "empty file"),
+        (b"hello world\r\n", "not an AEDAT header"),
+        (b"#!AER-DAT3.0\r\n#!END-HEADER\r\n", "version '3.0' is not supported"),
+    ],
+)
 def test_empty_wrong_magic_and_wrong_version(tmp_path, start, match):
     with pytest.raises(FormatError, match=match):
         open_recording(_write(tmp_path, start))
@@ -57,10 +60,13 @@ def test_truncated_header_is_an_error(tmp_path, aestream_aedat4):
         open_recording(_write(tmp_path, aestream_aedat4.read_bytes()[:100]))
 
 
-@pytest.mark.parametrize("data, fmt", [
-    (b"#!AER-DAT3.1\r\n#Format: RAW\r\n#Source 1: DAVIS346\r\n#!END-HEADER\r\n", "AEDAT 3.1"),
-    (b"#!AER-DAT2.0\r\n# AEChip: Davis346B\r\n#End Of ASCII Header\r\n", "AEDAT 2.0"),
-])
+@pytest.mark.parametrize(
+    "data, fmt",
+    [
+        (b"#!AER-DAT3.1\r\n#Format: RAW\r\n#Source 1: DAVIS346\r\n#!END-HEADER\r\n", "AEDAT 3.1"),
+        (b"#!AER-DAT2.0\r\n# AEChip: Davis346B\r\n#End Of ASCII Header\r\n", "AEDAT 2.0"),
+    ],
+)
 def test_header_only_files_have_no_records(tmp_path, data, fmt):
     with open_recording(_write(tmp_path, data)) as source:
         summary = summarize(source)
@@ -132,7 +138,8 @@ def test_unknown_stream_type_is_skipped_with_a_warning(tmp_path):
         '<attr key="typeIdentifier" type="string">EVTS</attr>\n            <node name="info" '
         'path="/mainloop/Recorder/outInfo/1/info/">',
         '<attr key="typeIdentifier" type="string">BBOX</attr>\n            <node name="info" '
-        'path="/mainloop/Recorder/outInfo/1/info/">')
+        'path="/mainloop/Recorder/outInfo/1/info/">',
+    )
     assert "BBOX" in info
     head = MAGIC + build_io_header(IOHeader(Compression.LZ4, -1, info))
     path = _write(tmp_path, head + _packet(1, b"xx") + _packet(7, b"yy") + _packet(0, payload))

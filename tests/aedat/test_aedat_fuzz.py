@@ -16,8 +16,9 @@ from davis_io.aedat import Compression, RecordingWarning, open_recording, write_
 from davis_io.errors import DavisIOError
 from davis_io.types import EVENT_DTYPE, IMU_DTYPE, TRIGGER_DTYPE, Frame, Packet, SourceInfo
 
-FUZZ = settings(max_examples=200, deadline=None, derandomize=True,
-                suppress_health_check=[HealthCheck.too_slow])
+FUZZ = settings(
+    max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 
 
 def _small_aedat4(compression):
@@ -26,12 +27,21 @@ def _small_aedat4(compression):
     events["x"], events["y"], events["p"] = 3, 4, 1
     imu = np.zeros(2, dtype=IMU_DTYPE)
     triggers = np.zeros(2, dtype=TRIGGER_DTYPE)
-    frame = Frame(image=np.arange(12, dtype=np.uint16).reshape(3, 4), exposure_start_us=2,
-                  exposure_end_us=5, readout_start_us=1, readout_end_us=9)
+    frame = Frame(
+        image=np.arange(12, dtype=np.uint16).reshape(3, 4),
+        exposure_start_us=2,
+        exposure_end_us=5,
+        readout_start_us=1,
+        readout_end_us=9,
+    )
     info = SourceInfo(camera="DAVIS346", serial="1", width=346, height=260)
     with tempfile.TemporaryDirectory() as folder:
-        path = write_aedat4([Packet(events=events, frames=[frame], imu=imu, triggers=triggers)],
-                            Path(folder) / "s.aedat4", info, compression=compression)
+        path = write_aedat4(
+            [Packet(events=events, frames=[frame], imu=imu, triggers=triggers)],
+            Path(folder) / "s.aedat4",
+            info,
+            compression=compression,
+        )
         return path.read_bytes()
 
 
@@ -59,8 +69,7 @@ def _read_everything(data: bytes) -> None:
 
 def _mutations(seed: bytes, first: int = 14):
     """Overwrite up to 8 bytes at or after ``first`` and optionally cut the file."""
-    edits = st.lists(st.tuples(st.integers(first, len(seed) - 1), st.integers(0, 255)),
-                     max_size=8)
+    edits = st.lists(st.tuples(st.integers(first, len(seed) - 1), st.integers(0, 255)), max_size=8)
     return st.tuples(edits, st.integers(first, len(seed)))
 
 
@@ -107,7 +116,9 @@ def test_fuzz_aedat2(mutation):
 
 
 @FUZZ
-@given(st.sampled_from([b"#!AER-DAT4.0\r\n", b"#!AER-DAT3.1\r\n", b"#!AER-DAT2.0\r\n"]),
-       st.binary(max_size=300))
+@given(
+    st.sampled_from([b"#!AER-DAT4.0\r\n", b"#!AER-DAT3.1\r\n", b"#!AER-DAT2.0\r\n"]),
+    st.binary(max_size=300),
+)
 def test_fuzz_random_bodies(magic, body):
     _read_everything(magic + body)

@@ -22,7 +22,10 @@ HAND_MADE = bytes.fromhex(
     "18000000"  # size prefix: 24 bytes follow
     "10000000"  # root uoffset at 4: table at 4 + 16 = 20
     "54455354"  # "TEST"
-    "0800" "0800" "0000" "0400"  # vtable at 12: 8 bytes, table 8 bytes, slot 0 absent, slot 1 +4
+    "0800"
+    "0800"
+    "0000"
+    "0400"  # vtable at 12: 8 bytes, table 8 bytes, slot 0 absent, slot 1 +4
     "08000000"  # table at 20: soffset 8 -> vtable at 20 - 8 = 12
     "04030201"  # slot 1 at 24: 0x01020304 little-endian
 )
@@ -37,14 +40,17 @@ def test_reads_a_hand_made_buffer():
 
 
 def test_builder_round_trip_with_every_field_kind():
-    data = build_buffer(b"ABCD", [
-        Scalar(0, "<q", -(1 << 40)),
-        Scalar(3, "<b", -3),
-        StringField(1, "héllo"),
-        VectorField(2, np.arange(3, dtype="<i8").tobytes(), 3, align=8),
-        StructField(4, "<ii", (7, -8)),
-        TablesField(5, [[Scalar(0, "<f", 1.5)], [Scalar(1, "<H", 9)]]),
-    ])
+    data = build_buffer(
+        b"ABCD",
+        [
+            Scalar(0, "<q", -(1 << 40)),
+            Scalar(3, "<b", -3),
+            StringField(1, "héllo"),
+            VectorField(2, np.arange(3, dtype="<i8").tobytes(), 3, align=8),
+            StructField(4, "<ii", (7, -8)),
+            TablesField(5, [[Scalar(0, "<f", 1.5)], [Scalar(1, "<H", 9)]]),
+        ],
+    )
     assert len(data) % 8 == 0 and int.from_bytes(data[:4], "little") == len(data) - 4
     table = root_table(data, b"ABCD")
     assert table.scalar(0, "<q") == -(1 << 40) and table.scalar(3, "<b") == -3
@@ -58,11 +64,14 @@ def test_builder_round_trip_with_every_field_kind():
     assert second.scalar(0, "<f", 0.25) == 0.25
 
 
-@pytest.mark.parametrize("damage, match", [
-    (lambda b: b[:6], "size prefix"),
-    (lambda b: b[:8] + b"NOPE" + b[12:], "file identifier"),
-    (lambda b: b[:4] + (10_000).to_bytes(4, "little") + b[8:], "outside"),
-])
+@pytest.mark.parametrize(
+    "damage, match",
+    [
+        (lambda b: b[:6], "size prefix"),
+        (lambda b: b[:8] + b"NOPE" + b[12:], "file identifier"),
+        (lambda b: b[:4] + (10_000).to_bytes(4, "little") + b[8:], "outside"),
+    ],
+)
 def test_damaged_buffers_raise_flatbuffer_error(damage, match):
     data = build_buffer(b"ABCD", [StringField(0, "x" * 40)])
     with pytest.raises(FlatBufferError, match=match):

@@ -199,8 +199,10 @@ def test_both_decoders_agree_on_every_packet_of_the_real_recording(aestream_aeda
     if system_liblz4() is None:
         pytest.skip("this system has no liblz4")
     with Aedat4Reader(aestream_aedat4) as reader:
-        payloads = [reader._read_at(reader._payload_offset(i, row), row.size)
-                    for i, row in enumerate(reader.data_table)]
+        payloads = [
+            reader._read_at(reader._payload_offset(i, row), row.size)
+            for i, row in enumerate(reader.data_table)
+        ]
     native, fallback = FrameDecompressor(native=True), FrameDecompressor(native=False)
     for payload in payloads:
         assert frame_layout(payload) is not None  # DV's frames take the fast paths

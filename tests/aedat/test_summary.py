@@ -9,8 +9,9 @@ from davis_io.types import EVENT_DTYPE, IMU_DTYPE, TRIGGER_DTYPE, Frame, Packet,
 
 class ListSource:
     def __init__(self, packets):
-        self.info = SourceInfo(camera="DAVIS240", serial="7", width=240, height=180,
-                               origin="emulator:test")
+        self.info = SourceInfo(
+            camera="DAVIS240", serial="7", width=240, height=180, origin="emulator:test"
+        )
         self._packets = packets
 
     def __enter__(self):
@@ -37,10 +38,19 @@ def _source():
     imu["t"] = [0, 1000, 2000]
     imu["temperature_c"] = [30.0, 31.0, 32.0]
     triggers = np.array([(100, 6), (500, 7), (600, 7)], dtype=TRIGGER_DTYPE)
-    frame = Frame(image=np.zeros((180, 240), np.uint16), exposure_start_us=400,
-                  exposure_end_us=900, readout_start_us=50, readout_end_us=1500)
-    return ListSource([Packet(events=first, imu=imu, triggers=triggers, frames=[frame]),
-                       Packet(events=second, dropped_events=12, notes=["host queue overflow"])])
+    frame = Frame(
+        image=np.zeros((180, 240), np.uint16),
+        exposure_start_us=400,
+        exposure_end_us=900,
+        readout_start_us=50,
+        readout_end_us=1500,
+    )
+    return ListSource(
+        [
+            Packet(events=first, imu=imu, triggers=triggers, frames=[frame]),
+            Packet(events=second, dropped_events=12, notes=["host queue overflow"]),
+        ]
+    )
 
 
 def test_counts_ranges_and_rates():

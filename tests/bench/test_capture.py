@@ -23,7 +23,12 @@ def test_figures_of_the_decode_result_in_millions():
     }
     figures = figures_from(DECODE, result)
     assert figures.keys() == {
-        "events", "ours_mev_s", "python_lz4_mev_s", "dv_mev_s", "ratio", "python_lz4_ratio"
+        "events",
+        "ours_mev_s",
+        "python_lz4_mev_s",
+        "dv_mev_s",
+        "ratio",
+        "python_lz4_ratio",
     }
     assert figures["events"] == 5012345.0 and figures["ratio"] == 1.45
     assert math.isclose(figures["python_lz4_mev_s"], 55.0) and figures["python_lz4_ratio"] == 0.9

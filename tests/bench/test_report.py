@@ -107,13 +107,21 @@ def test_report_counts_the_rungs_read_back():
 
 def full_report(rows):
     plan = make_plan(False, ("fast",), ("full", "base", "oracle"), table4=False)
-    return BenchReport("python tools/bench.py", MACHINE, "2026-01-01 00:00 UTC", plan,
-                       "estimated", wall_s=600.0, rows=rows)
+    return BenchReport(
+        "python tools/bench.py",
+        MACHINE,
+        "2026-01-01 00:00 UTC",
+        plan,
+        "estimated",
+        wall_s=600.0,
+        rows=rows,
+    )
 
 
 def scene_run(session, variant, hdr, novel, budget=600.0, **kwargs):
-    return RunRow(session, "fast", variant, budget, hdr_psnr=hdr, novel_psnr=novel, steps=6000,
-                  **kwargs)
+    return RunRow(
+        session, "fast", variant, budget, hdr_psnr=hdr, novel_psnr=novel, steps=6000, **kwargs
+    )
 
 
 def test_oracle_beside_full_is_read_at_the_top_budget():
@@ -140,8 +148,10 @@ def test_scene_rows_judge_each_scene_at_the_top_budget():
         scene_run("lamp-film", "full", math.nan, math.nan, status="fit failed"),
     ]
     report = full_report(rows)
-    report.sessions = [SessionOutcome(spec, spec.key, rotation_error_deg=0.6, centre_error=0.014)
-                       for spec in report.plan.sessions[:1]]
+    report.sessions = [
+        SessionOutcome(spec, spec.key, rotation_error_deg=0.6, centre_error=0.014)
+        for spec in report.plan.sessions[:1]
+    ]
     table = {row[0]: row for row in scene_rows(report)}
     assert list(table) == ["room", "lamp", "corridor", "lamp-film"]
     room = table["room"]
@@ -164,8 +174,9 @@ def test_seed_runs_set_the_tie_limit_of_the_orderings():
     assert seed_scores(report) == [(0, 31.6), (1, 31.9), (2, 31.3)]
     assert math.isclose(tie_limit(report), 0.6)
     table3 = next(v for v in judge_all(report) if v.comparison.title.startswith("Table 3"))
-    full_over_base = next(c for c in table3.claims
-                          if (c.claim.better, c.claim.worse) == ("full", "base"))
+    full_over_base = next(
+        c for c in table3.claims if (c.claim.better, c.claim.worse) == ("full", "base")
+    )
     assert full_over_base.outcome == "tie"  # 0.1 dB apart, the seeds 0.6 dB
     text = render_markdown(report)
     assert "seed 0: 31.60, seed 1: 31.90, seed 2: 31.30 dB" in text

@@ -8,9 +8,14 @@ METRICS = {
     "hdr_unaligned": {"psnr": 11.0, "ssim": 0.5},
     "novel_exposure": {"psnr": 27.0, "ssim": 0.93},
     "ldr": {"0.16": {"psnr": 28.0, "ssim": 0.9}, "0.01": {"psnr": 26.0, "ssim": 0.9}},
-    "training": {"steps": 120, "elapsed_s": 60.5, "stopped": "budget", "rays_per_s": 5000.0,
-                 "best_validation_psnr": None,
-                 "history": [{"step": 100, "ldr": 0.01, "events": 2.5, "val_psnr": 20.0}]},
+    "training": {
+        "steps": 120,
+        "elapsed_s": 60.5,
+        "stopped": "budget",
+        "rays_per_s": 5000.0,
+        "best_validation_psnr": None,
+        "history": [{"step": 100, "ldr": 0.01, "events": 2.5, "val_psnr": 20.0}],
+    },
 }
 
 
@@ -33,8 +38,10 @@ def test_metrics_without_truth_are_not_ok():
 def test_row_reads_the_scores_before_registration_and_the_crf_error():
     metrics = {
         **METRICS,
-        "test_poses": {"registered": True,
-                       "at_mapped_poses": {"hdr_psnr": 22.5, "novel_exposure_psnr": 20.25}},
+        "test_poses": {
+            "registered": True,
+            "at_mapped_poses": {"hdr_psnr": 22.5, "novel_exposure_psnr": 20.25},
+        },
         "crf_error": {"rms": [0.01, None, 0.03], "max": [0.1, None, 0.2]},
     }
     row = row_from_metrics(RunRow("room", "fast", "full", 600.0), metrics)

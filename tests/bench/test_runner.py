@@ -5,8 +5,9 @@ from benchlib.runner import run_measured
 
 
 def test_each_child_reports_its_own_peak_memory(tmp_path):
-    big = run_measured([sys.executable, "-c", "b = bytearray(300_000_000); print('done')"],
-                       tmp_path / "big.log")
+    big = run_measured(
+        [sys.executable, "-c", "b = bytearray(300_000_000); print('done')"], tmp_path / "big.log"
+    )
     small = run_measured([sys.executable, "-c", "print('small')"], tmp_path / "small.log")
     assert big.returncode == 0 and (tmp_path / "big.log").read_text() == "done\n"
     assert big.peak_rss_mb > 300  # the 300 MB buffer plus the interpreter
@@ -18,8 +19,9 @@ def test_each_child_reports_its_own_peak_memory(tmp_path):
 def test_exit_code_and_time_limit(tmp_path):
     failed = run_measured([sys.executable, "-c", "raise SystemExit(3)"], tmp_path / "f.log")
     assert failed.returncode == 3 and not failed.timed_out
-    slow = run_measured([sys.executable, "-c", "import time; time.sleep(30)"], tmp_path / "s.log",
-                        timeout_s=0.5)
+    slow = run_measured(
+        [sys.executable, "-c", "import time; time.sleep(30)"], tmp_path / "s.log", timeout_s=0.5
+    )
     assert slow.timed_out and slow.returncode == -9 and slow.wall_s < 10
     assert slow.peak_rss_mb != slow.peak_rss_mb  # NaN: killed before anything was measured
 

@@ -18,8 +18,19 @@ dv = pytest.importorskip("dv_processing")
 @pytest.fixture
 def replay_session(tmp_path, aestream_aedat4, capsys):
     folder = tmp_path / "s"
-    code = main(["record", "--replay", str(aestream_aedat4), "--exposure", "0.15",
-                 "--out", str(folder), "--bins", "4"])
+    code = main(
+        [
+            "record",
+            "--replay",
+            str(aestream_aedat4),
+            "--exposure",
+            "0.15",
+            "--out",
+            str(folder),
+            "--bins",
+            "4",
+        ]
+    )
     captured = capsys.readouterr()
     assert code == 0, captured.err
     return folder, captured

@@ -53,8 +53,9 @@ def test_killed_recording_opens_and_repairs(tmp_path):
         counts = session.window_event_counts()
         for index in (0, frames - 1):
             assert int(session.frame(index).image[0, 0]) == index % 1000
-            window = session.events_between(int(table.exposure_start_us[index]),
-                                            int(table.exposure_end_us[index]))
+            window = session.events_between(
+                int(table.exposure_start_us[index]), int(table.exposure_end_us[index])
+            )
             assert counts[index] == len(window) > 0
         events = session.event_count
     report = repair_session(folder)

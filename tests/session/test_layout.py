@@ -18,9 +18,16 @@ def test_every_dataset_has_the_documented_dtype_and_shape(tmp_path):
     packets.insert(1, Packet(imu=imu, triggers=triggers))
     record(ListSource(packets), tmp_path / "s", bins=4)
     with Session.open(tmp_path / "s") as session:
-        session.write_poses(4, SessionPoses(np.tile(np.eye(4), (3, 5, 1, 1)),
-                                            np.ones((3, 5), bool), np.array([1.0, 1, 4, 3]),
-                                            np.zeros(0), np.array([0.1, 5.0])))
+        session.write_poses(
+            4,
+            SessionPoses(
+                np.tile(np.eye(4), (3, 5, 1, 1)),
+                np.ones((3, 5), bool),
+                np.array([1.0, 1, 4, 3]),
+                np.zeros(0),
+                np.array([0.1, 5.0]),
+            ),
+        )
     frames, b = 3, 4
     events = sum(len(p.events) for p in packets)
     expected = {

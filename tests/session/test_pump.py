@@ -30,8 +30,17 @@ def test_deferred_frames_are_binned_later_from_the_stored_events(tmp_path, monke
         pending.put(item)
     writer = SessionWriter(tmp_path / "session.h5", width=WIDTH, height=HEIGHT, b=3)
     outcome, progress = Outcome(), Progress()
-    write_packets(pending, writer, ExposureSync(writer.read_events), threading.Event(), outcome,
-                  progress, max_frames=None, duration_us=None, defer_when_busy=True)
+    write_packets(
+        pending,
+        writer,
+        ExposureSync(writer.read_events),
+        threading.Event(),
+        outcome,
+        progress,
+        max_frames=None,
+        duration_us=None,
+        defer_when_busy=True,
+    )
     writer.close()
     assert outcome.storage_error is None and outcome.write_error is None
     # Frames closed while the queue was over half full were read back (deferred), not all.

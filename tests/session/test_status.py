@@ -10,8 +10,14 @@ from davis_io.types import EVENT_DTYPE, Frame
 
 
 def frame_of(image, bit_depth=10):
-    return Frame(image=image, exposure_start_us=0, exposure_end_us=150_000,
-                 readout_start_us=0, readout_end_us=160_000, bit_depth=bit_depth)
+    return Frame(
+        image=image,
+        exposure_start_us=0,
+        exposure_end_us=150_000,
+        readout_start_us=0,
+        readout_end_us=160_000,
+        bit_depth=bit_depth,
+    )
 
 
 def bins_with(counts_per_pixel, width=10, height=10, b=1):
@@ -64,13 +70,26 @@ def test_blur_is_judged_against_the_bin_count():
 
 
 def test_status_line():
-    status = RecordingStatus(elapsed_s=12.34, frames=61, events=10, events_per_s=1.2e6,
-                             bytes_written=45_100_000, queue_fill=0.03,
-                             drops=DropCounters(source_events=5, queue_events=2, queue_frames=1),
-                             exposure_measured_us=150_000)
+    status = RecordingStatus(
+        elapsed_s=12.34,
+        frames=61,
+        events=10,
+        events_per_s=1.2e6,
+        bytes_written=45_100_000,
+        queue_fill=0.03,
+        drops=DropCounters(source_events=5, queue_events=2, queue_frames=1),
+        exposure_measured_us=150_000,
+    )
     line = format_status_line(status)
-    for part in ("12.3 s", "61 frames", "1.20 Mev/s", "45.1 MB", "queue 3%", "drops 7 ev 1 fr",
-                 "exposure 150.00 ms"):
+    for part in (
+        "12.3 s",
+        "61 frames",
+        "1.20 Mev/s",
+        "45.1 MB",
+        "queue 3%",
+        "drops 7 ev 1 fr",
+        "exposure 150.00 ms",
+    ):
         assert part in line
     assert "exposure -" in format_status_line(RecordingStatus())
 

@@ -131,9 +131,16 @@ def test_manifest_fields_and_bad_manifests(recorded, tmp_path):
 def test_manifest_json_keeps_device_facts_json_lacks():
     from davis_io.types import ColorFilter
 
-    manifest = SessionManifest(camera="DAVIS346", serial="1", width=346, height=260,
-                               color_filter="mono", source="usb", b=4,
-                               device_config={"filter": ColorFilter.RGGB, "gain": np.int64(3)})
+    manifest = SessionManifest(
+        camera="DAVIS346",
+        serial="1",
+        width=346,
+        height=260,
+        color_filter="mono",
+        source="usb",
+        b=4,
+        device_config={"filter": ColorFilter.RGGB, "gain": np.int64(3)},
+    )
     again = SessionManifest.from_json(manifest.to_json())
     assert again.device_config == {"filter": "RGGB", "gain": 3}
     assert again == SessionManifest.from_json(again.to_json())

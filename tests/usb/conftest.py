@@ -23,8 +23,12 @@ class ListSource:
 
 def _drained(device, camera, packet) -> bool:
     """True once the emulated device sent everything and the consumer got every packet of it."""
-    return (device.exhausted and packet.is_empty and not camera.reader.pending_packets
-            and camera.reader.stats.bytes == device.bytes_delivered)
+    return (
+        device.exhausted
+        and packet.is_empty
+        and not camera.reader.pending_packets
+        and camera.reader.stats.bytes == device.bytes_delivered
+    )
 
 
 @pytest.fixture

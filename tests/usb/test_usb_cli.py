@@ -72,8 +72,10 @@ def emulated(monkeypatch):
 
 
 def test_devices_lists_each_camera(emulated, capsys):
-    emulated.devices += [EmulatedDavis346(serial="00000104"),
-                         EmulatedDavis346(serial="00000200", address=2, firmware=5)]
+    emulated.devices += [
+        EmulatedDavis346(serial="00000104"),
+        EmulatedDavis346(serial="00000200", address=2, firmware=5),
+    ]
     assert main(["devices"]) == 0
     out = capsys.readouterr().out
     assert "DAVIS346  serial 00000104  firmware 6  logic 18.1  USB super" in out
@@ -94,8 +96,11 @@ def test_doctor_reports_a_permission_problem_with_the_fix(emulated, capsys, tmp_
 
 
 def test_doctor_does_not_import_torch():
-    code = ("import sys; from davis_io.usb.doctor import run_checks; run_checks(); "
-            "print('torch' in sys.modules)")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                            check=True, timeout=120)
+    code = (
+        "import sys; from davis_io.usb.doctor import run_checks; run_checks(); "
+        "print('torch' in sys.modules)"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
     assert result.stdout.strip() == "False"

@@ -13,12 +13,31 @@ from davis_io.usb.config import config_registers
 from davis_io.usb.emulated import EmulatedBackend, EmulatedDavis346
 
 # davis-protocol.md §2.7, dataStart step 1 and dataStop: (module, param) switched off in order.
-ALL_OFF = [(1, 3, 0), (2, 4, 0), (3, 2, 0), (3, 3, 0), (3, 4, 0), (4, 0, 0), (0, 0, 0), (0, 1, 0),
-           (9, 0, 0), (0, 3, 0)]
+ALL_OFF = [
+    (1, 3, 0),
+    (2, 4, 0),
+    (3, 2, 0),
+    (3, 3, 0),
+    (3, 4, 0),
+    (4, 0, 0),
+    (0, 0, 0),
+    (0, 1, 0),
+    (9, 0, 0),
+    (0, 3, 0),
+]
 # Steps 5-7: RUN_CHIP, then USB RUN, TIMESTAMP_RUN, MUX RUN, then the producers.
-START_ON = [(0, 3, 1), (9, 0, 1), (0, 1, 1), (0, 0, 1), (1, 3, 1), (2, 4, 1), (3, 2, 1), (3, 3, 1),
-            (3, 4, 1), (4, 0, 1)]
-
+START_ON = [
+    (0, 3, 1),
+    (9, 0, 1),
+    (0, 1, 1),
+    (0, 0, 1),
+    (1, 3, 1),
+    (2, 4, 1),
+    (3, 2, 1),
+    (3, 3, 1),
+    (3, 4, 1),
+    (4, 0, 1),
+]
 
 
 def random_events(n: int, seed: int = 0) -> np.ndarray:
@@ -31,21 +50,30 @@ def random_events(n: int, seed: int = 0) -> np.ndarray:
 
 
 def test_listing_names_model_serial_versions_and_speed():
-    backend = EmulatedBackend(EmulatedDavis346(serial="00000104"),
-                              EmulatedDavis346(serial="00000777", address=2, logic_version=17))
+    backend = EmulatedBackend(
+        EmulatedDavis346(serial="00000104"),
+        EmulatedDavis346(serial="00000777", address=2, logic_version=17),
+    )
     first, second = list_cameras(backend)
-    assert (first.model, first.serial, first.firmware, first.logic) == ("DAVIS346", "00000104", 6,
-                                                                         "18.1")
+    assert (first.model, first.serial, first.firmware, first.logic) == (
+        "DAVIS346",
+        "00000104",
+        6,
+        "18.1",
+    )
     assert first.usable and first.speed.startswith("super")
     assert not second.usable
     assert "logic version 17 found, exactly 18 needed" in second.problem
 
 
-@pytest.mark.parametrize(("options", "message"), [
-    ({"firmware": 5}, "firmware version 5 found, 6 or newer needed"),
-    ({"logic_version": 19}, "logic version 19 found, exactly 18 needed"),
-    ({"logic_patch": 0}, "logic patch 0 found, 1 or newer needed"),
-])
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"firmware": 5}, "firmware version 5 found, 6 or newer needed"),
+        ({"logic_version": 19}, "logic version 19 found, exactly 18 needed"),
+        ({"logic_patch": 0}, "logic patch 0 found, 1 or newer needed"),
+    ],
+)
 def test_unsupported_versions_are_refused(options, message):
     device = EmulatedDavis346(**options)
     with pytest.raises(DeviceError, match=message):
@@ -54,8 +82,9 @@ def test_unsupported_versions_are_refused(options, message):
 
 
 def test_several_cameras_need_a_serial():
-    backend = EmulatedBackend(EmulatedDavis346(serial="AAA"), EmulatedDavis346(serial="BBB",
-                                                                               address=2))
+    backend = EmulatedBackend(
+        EmulatedDavis346(serial="AAA"), EmulatedDavis346(serial="BBB", address=2)
+    )
     with pytest.raises(DeviceError, match=r"2 DAVIS cameras attached \(AAA, BBB\)"):
         open_camera(backend=backend)
     camera = open_camera("BBB", backend=backend)
@@ -109,14 +138,16 @@ def test_config_change_writes_only_what_changed():
         # 150000 µs x 30 MHz ADC clock = 4500000 cycles, one single write, nothing else.
         assert writes == [(2, 12, 4_500_000)]
         assert [(r.request, r.writes) for r in device.requests[before:]] == [
-            (0xBF, ((2, 12, 4_500_000),))]
+            (0xBF, ((2, 12, 4_500_000),))
+        ]
         # The recorded configuration follows, with the chip's default biases spelled out.
         assert camera.info.extra["config"]["aps"]["exposure_us"] == 150_000
         assert camera.info.extra["config"]["biases"]["on_bn"] == 0x5FFF
         before = len(device.requests)
         camera.timestamp_reset()
         assert [(r.request, r.writes) for r in device.requests[before:]] == [
-            (0xC2, ((0, 2, 1), (0, 2, 0)))]
+            (0xC2, ((0, 2, 1), (0, 2, 0)))
+        ]
 
 
 def test_ctrl_c_inside_the_block_still_stops_and_releases(list_source):
@@ -140,8 +171,9 @@ def test_close_after_unplug_releases_and_joins(list_source):
 
 def test_slow_consumer_never_blocks_the_reader_and_losses_are_counted(list_source, drained):
     ev = random_events(300_000, seed=5)
-    device = EmulatedDavis346(source=list_source([Packet(events=ev[i:i + 30_000])
-                                                 for i in range(0, len(ev), 30_000)]))
+    device = EmulatedDavis346(
+        source=list_source([Packet(events=ev[i : i + 30_000]) for i in range(0, len(ev), 30_000)])
+    )
     camera = open_camera(backend=EmulatedBackend(device), queue_packets=2, read_bytes=16384)
     received, reported = 0, 0
     with camera:
@@ -184,8 +216,10 @@ def test_a_failing_source_ends_the_stream_with_a_typed_error():
             raise OSError("recording vanished")
 
     device = EmulatedDavis346(source=Broken())
-    with pytest.raises(DeviceError, match="recording vanished"), open_camera(
-            backend=EmulatedBackend(device)) as camera:
+    with (
+        pytest.raises(DeviceError, match="recording vanished"),
+        open_camera(backend=EmulatedBackend(device)) as camera,
+    ):
         for _ in camera:
             pass
     assert not device.claimed and not camera.reader.running

@@ -26,8 +26,9 @@ def read_all(path, model="davis346"):
 def test_dump_round_trip(tmp_path, list_source):
     ev = events(400_000)
     path = tmp_path / "stream.bin"
-    written = write_raw_usb_dump(list_source([Packet(events=ev[:200_000]),
-                                             Packet(events=ev[200_000:])]), path)
+    written = write_raw_usb_dump(
+        list_source([Packet(events=ev[:200_000]), Packet(events=ev[200_000:])]), path
+    )
     assert written == path.stat().st_size and written % 2 == 0
     # The first two bytes are the timestamp reset word 0x0001, little-endian.
     assert path.read_bytes()[:2] == b"\x01\x00"
@@ -59,8 +60,10 @@ def test_empty_dump(tmp_path):
 def test_bad_model_and_missing_file(tmp_path):
     with pytest.raises(UsageError, match="unknown camera model 'davis999'"):
         open_raw_usb_dump(tmp_path / "x.bin", "davis999")
-    with pytest.raises(FormatError, match="cannot open raw USB dump"), open_raw_usb_dump(
-            tmp_path / "missing.bin", "davis346"):
+    with (
+        pytest.raises(FormatError, match="cannot open raw USB dump"),
+        open_raw_usb_dump(tmp_path / "missing.bin", "davis346"),
+    ):
         pass
 
 

@@ -78,10 +78,17 @@ def assert_same_frames(decoded, expected):
         assert frame.bit_depth == 10 and source.bit_depth == 8
         assert np.array_equal(frame.image, source.image.astype(np.uint16) << 2)
         assert np.array_equal(frame.image >> 2, source.image)
-        assert (frame.readout_start_us + origin, frame.exposure_start_us + origin,
-                frame.exposure_end_us + origin, frame.readout_end_us + origin) == (
-            source.readout_start_us, source.exposure_start_us, source.exposure_end_us,
-            source.readout_end_us)
+        assert (
+            frame.readout_start_us + origin,
+            frame.exposure_start_us + origin,
+            frame.exposure_end_us + origin,
+            frame.readout_end_us + origin,
+        ) == (
+            source.readout_start_us,
+            source.exposure_start_us,
+            source.exposure_end_us,
+            source.readout_end_us,
+        )
 
 
 def column_words_delivered(device: EmulatedDavis346) -> int:
@@ -94,23 +101,29 @@ def column_words_delivered(device: EmulatedDavis346) -> int:
 def test_clean_round_trip_is_exact(aestream_aedat4_path, fixture_packets, drained):
     run, _ = stream(aestream_aedat4_path, StreamFaults(), drained)
     assert run.error is None and run.dropped == 0
-    assert np.array_equal(run.events, fixture_packets["events"])   # t, x, y, p
+    assert np.array_equal(run.events, fixture_packets["events"])  # t, x, y, p
     assert_same_frames(run.frames, fixture_packets["frames"])
     np.testing.assert_array_equal(run.imu["t"], fixture_packets["imu"]["t"])
     np.testing.assert_allclose(run.imu["acc_g"], fixture_packets["imu"]["acc_g"], atol=1e-6)
     np.testing.assert_allclose(run.imu["gyro_dps"], fixture_packets["imu"]["gyro_dps"], atol=1e-5)
-    np.testing.assert_allclose(run.imu["temperature_c"], fixture_packets["imu"]["temperature_c"],
-                               atol=1e-4)
-    expected = [(f.readout_start_us, TriggerKind.APS_FRAME_START)
-                for f in fixture_packets["frames"]]
+    np.testing.assert_allclose(
+        run.imu["temperature_c"], fixture_packets["imu"]["temperature_c"], atol=1e-4
+    )
+    expected = [
+        (f.readout_start_us, TriggerKind.APS_FRAME_START) for f in fixture_packets["frames"]
+    ]
     decoded = run.triggers[run.triggers["kind"] == TriggerKind.APS_FRAME_START]
     assert decoded.tolist() == expected
 
 
-@pytest.mark.parametrize("faults", [
-    StreamFaults(split_transfers=True),
-    StreamFaults(device_start_us=2**31 - 250_000),
-], ids=["split-words", "31-bit-wrap"])
+@pytest.mark.parametrize(
+    "faults",
+    [
+        StreamFaults(split_transfers=True),
+        StreamFaults(device_start_us=2**31 - 250_000),
+    ],
+    ids=["split-words", "31-bit-wrap"],
+)
 def test_lossless_faults_change_nothing(aestream_aedat4_path, fixture_packets, drained, faults):
     run, _ = stream(aestream_aedat4_path, faults, drained)
     assert np.array_equal(run.events, fixture_packets["events"])
@@ -118,12 +131,13 @@ def test_lossless_faults_change_nothing(aestream_aedat4_path, fixture_packets, d
     if faults.split_transfers:
         assert run.stats.split_words > 0
     else:
-        device_t = run.events["t"] - run.frames[0][1]   # back to device time
+        device_t = run.events["t"] - run.frames[0][1]  # back to device time
         assert device_t[0] < 2**31 < device_t[-1]
 
 
-def test_timestamp_reset_keeps_events_and_drops_the_cut_frame(aestream_aedat4_path,
-                                                              fixture_packets, drained):
+def test_timestamp_reset_keeps_events_and_drops_the_cut_frame(
+    aestream_aedat4_path, fixture_packets, drained
+):
     run, _ = stream(aestream_aedat4_path, StreamFaults(reset_at_us=(RESET_IN_FRAME_2,)), drained)
     assert np.array_equal(run.events, fixture_packets["events"])
     frames = fixture_packets["frames"]
@@ -145,12 +159,17 @@ def test_device_drops_are_reported_exactly(aestream_aedat4_path, fixture_packets
     assert_same_frames(run.frames, fixture_packets["frames"])
 
 
-@pytest.mark.parametrize(("faults", "error"), [
-    (StreamFaults(stall_after_bytes=700_001), DeviceStalled),
-    (StreamFaults(disconnect_after_bytes=900_001), DeviceDisconnected),
-], ids=["stall", "disconnect"])
+@pytest.mark.parametrize(
+    ("faults", "error"),
+    [
+        (StreamFaults(stall_after_bytes=700_001), DeviceStalled),
+        (StreamFaults(disconnect_after_bytes=900_001), DeviceDisconnected),
+    ],
+    ids=["stall", "disconnect"],
+)
 def test_stall_and_unplug_end_with_a_typed_error_after_all_complete_data(
-        aestream_aedat4_path, fixture_packets, drained, faults, error):
+    aestream_aedat4_path, fixture_packets, drained, faults, error
+):
     run, device = stream(aestream_aedat4_path, faults, drained)
     assert isinstance(run.error, error)
     delivered = column_words_delivered(device)
@@ -161,9 +180,13 @@ def test_stall_and_unplug_end_with_a_typed_error_after_all_complete_data(
 
 
 def test_every_fault_at_once(aestream_aedat4_path, fixture_packets, drained):
-    faults = StreamFaults(split_transfers=True, device_start_us=2**31 - 250_000,
-                          reset_at_us=(RESET_IN_FRAME_2,), drop_event_windows_us=(DROP_WINDOW,),
-                          disconnect_after_bytes=1_400_001)
+    faults = StreamFaults(
+        split_transfers=True,
+        device_start_us=2**31 - 250_000,
+        reset_at_us=(RESET_IN_FRAME_2,),
+        drop_event_windows_us=(DROP_WINDOW,),
+        disconnect_after_bytes=1_400_001,
+    )
     run, device = stream(aestream_aedat4_path, faults, drained)
     assert isinstance(run.error, DeviceDisconnected)
     t = fixture_packets["events"]["t"]

@@ -23,8 +23,20 @@ RESET_COLUMNS = [0x000B, 0x4258, 0x4258, 0x412C, 0x000D, 0x000B, 0x4258, 0x4258,
 # Signal reads (0x000C opens a signal column):
 # column 0: 400, 768, 100; column 1: 0, 600, 1.
 SIGNAL_COLUMNS = [0x000C, 0x4190, 0x4300, 0x4064, 0x000D, 0x000C, 0x4000, 0x4258, 0x4001, 0x000D]
-FRAME = ([0x8010, 0x0008, *ROI_WORDS, *EXPOSURE_WORDS, *RESET_COLUMNS, 0x8020, 0x000E, 0x8030,
-          0x000F, *SIGNAL_COLUMNS, 0x8040, 0x000A])
+FRAME = [
+    0x8010,
+    0x0008,
+    *ROI_WORDS,
+    *EXPOSURE_WORDS,
+    *RESET_COLUMNS,
+    0x8020,
+    0x000E,
+    0x8030,
+    0x000F,
+    *SIGNAL_COLUMNS,
+    0x8040,
+    0x000A,
+]
 # CDS per pixel (column c, sample n): 600-400 = 200; 600-768 < 0 -> 0; reset 300 < 384 -> 1023;
 # signal 0 -> 1023; 600-600 = 0; 600-1 = 599. Image row y = sample n, column x = column c.
 EXPECTED_IMAGE = [[200, 1023], [0, 0], [1023, 599]]
@@ -44,16 +56,21 @@ def test_frame_pixels_times_roi_exposure_and_markers():
     assert (frame.exposure_end_us, frame.readout_end_us) == (48, 64)
     assert frame.position == (4, 5)
     assert decoder.frame_exposure_cycles == 90000
-    assert packet.triggers.tolist() == [(16, TriggerKind.APS_FRAME_START),
-                                        (32, TriggerKind.APS_EXPOSURE_START),
-                                        (48, TriggerKind.APS_EXPOSURE_END),
-                                        (64, TriggerKind.APS_FRAME_END)]
+    assert packet.triggers.tolist() == [
+        (16, TriggerKind.APS_FRAME_START),
+        (32, TriggerKind.APS_EXPOSURE_START),
+        (48, TriggerKind.APS_EXPOSURE_END),
+        (64, TriggerKind.APS_FRAME_END),
+    ]
 
 
-@pytest.mark.parametrize(("orientation", "expected"), [
-    (0b010, [[1023, 200], [0, 0], [599, 1023]]),   # flipX: column c -> C-1-c
-    (0b001, [[1023, 599], [0, 0], [200, 1023]]),   # flipY: sample n -> R-1-n
-])
+@pytest.mark.parametrize(
+    ("orientation", "expected"),
+    [
+        (0b010, [[1023, 200], [0, 0], [599, 1023]]),  # flipX: column c -> C-1-c
+        (0b001, [[1023, 599], [0, 0], [200, 1023]]),  # flipY: sample n -> R-1-n
+    ],
+)
 def test_frame_flips(orientation, expected):
     packet, _ = decode(FRAME, SensorLayout(aps_orientation=orientation))
     assert packet.frames[0].image.tolist() == expected
@@ -93,13 +110,22 @@ def test_timestamp_reset_cuts_a_frame_in_progress():
 # IMU sample: start (0x0005), config 0x53E5 = sub-code 3, byte 0b111_001_01: all three sensors
 # on, accel index 1 (8192 LSB/g), gyro index 1 (65.536 LSB/(deg/s)); 14 bytes big-endian;
 # end (0x0007) at t = 512.
-IMU_BYTES = [0x20, 0x00,  # accel x 0x2000 = 8192 -> 1 g
-             0xF0, 0x00,  # accel y 0xF000 = -4096 -> -0.5 g
-             0x00, 0x00,  # accel z 0
-             0x01, 0x54,  # temperature 0x0154 = 340 -> 340/340 + 35 = 36 C
-             0x02, 0x8F,  # gyro x 655 -> 655/65.536 = 9.99451 deg/s
-             0xFF, 0x7D,  # gyro y -131 -> -1.99890 deg/s
-             0x00, 0x41]  # gyro z 65 -> 0.99182 deg/s
+IMU_BYTES = [
+    0x20,
+    0x00,  # accel x 0x2000 = 8192 -> 1 g
+    0xF0,
+    0x00,  # accel y 0xF000 = -4096 -> -0.5 g
+    0x00,
+    0x00,  # accel z 0
+    0x01,
+    0x54,  # temperature 0x0154 = 340 -> 340/340 + 35 = 36 C
+    0x02,
+    0x8F,  # gyro x 655 -> 655/65.536 = 9.99451 deg/s
+    0xFF,
+    0x7D,  # gyro y -131 -> -1.99890 deg/s
+    0x00,
+    0x41,
+]  # gyro z 65 -> 0.99182 deg/s
 IMU = [0x8100, 0x0005, 0x53E5, *[0x5000 | b for b in IMU_BYTES], 0x8200, 0x0007]
 
 
@@ -147,13 +173,16 @@ def test_rolling_shutter_frame_start_is_handled_the_same():
     assert packet.triggers.tolist()[0] == (16, TriggerKind.APS_FRAME_START)
 
 
-@pytest.mark.parametrize(("roi", "expected"), [
-    ((340, 0, 349, 9), (0, 0, 9, 9)),        # runs past column 345: position becomes 0
-    # end column before start: width <= 0 becomes the full 346, and 10 + 346 > 346 moves the
-    # start to 0.
-    ((10, 20, 5, 29), (0, 20, 345, 29)),
-    ((0, 0, 345, 259), (0, 0, 345, 259)),    # full array unchanged
-])
+@pytest.mark.parametrize(
+    ("roi", "expected"),
+    [
+        ((340, 0, 349, 9), (0, 0, 9, 9)),  # runs past column 345: position becomes 0
+        # end column before start: width <= 0 becomes the full 346, and 10 + 346 > 346 moves the
+        # start to 0.
+        ((10, 20, 5, 29), (0, 20, 345, 29)),
+        ((0, 0, 345, 259), (0, 0, 345, 259)),  # full array unchanged
+    ],
+)
 def test_roi_sanity_clamp(roi, expected):
     from davis_io.usb.assemble import FrameAssembler
 

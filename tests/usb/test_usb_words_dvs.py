@@ -107,9 +107,12 @@ def test_external_input_and_generator_specials_become_triggers():
     packet, _ = decode(0x8009, 0x0002, 0x0003, 0x0004, 0x0010, 0x0011)
     assert packet.triggers["t"].tolist() == [9] * 5
     assert packet.triggers["kind"].tolist() == [
-        TriggerKind.EXTERNAL_SIGNAL_FALLING_EDGE, TriggerKind.EXTERNAL_SIGNAL_RISING_EDGE,
-        TriggerKind.EXTERNAL_SIGNAL_PULSE, TriggerKind.EXTERNAL_GENERATOR_FALLING_EDGE,
-        TriggerKind.EXTERNAL_GENERATOR_RISING_EDGE]
+        TriggerKind.EXTERNAL_SIGNAL_FALLING_EDGE,
+        TriggerKind.EXTERNAL_SIGNAL_RISING_EDGE,
+        TriggerKind.EXTERNAL_SIGNAL_PULSE,
+        TriggerKind.EXTERNAL_GENERATOR_FALLING_EDGE,
+        TriggerKind.EXTERNAL_GENERATOR_RISING_EDGE,
+    ]
 
 
 def test_unknown_codes_are_counted_never_fatal():

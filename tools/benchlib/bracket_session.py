@@ -48,25 +48,42 @@ def _register_noise_preset(scale: float) -> str:
         return BASE_DVS_PRESET
     base = DVS_PRESETS[BASE_DVS_PRESET]
     name = f"{BASE_DVS_PRESET}-x{scale:g}"
-    DVS_PRESETS.setdefault(name, dataclasses.replace(
-        base, leak_rate_hz=base.leak_rate_hz * scale,
-        shot_noise_rate_hz=base.shot_noise_rate_hz * scale))
+    DVS_PRESETS.setdefault(
+        name,
+        dataclasses.replace(
+            base,
+            leak_rate_hz=base.leak_rate_hz * scale,
+            shot_noise_rate_hz=base.shot_noise_rate_hz * scale,
+        ),
+    )
     return name
 
 
-def bracket_camera(scene: str, seed: int, exposure_us: int, gain_exposure_us: int,
-                   noise_scale: float, frames: int, test_views: int) -> EmulatedCamera:
+def bracket_camera(
+    scene: str,
+    seed: int,
+    exposure_us: int,
+    gain_exposure_us: int,
+    noise_scale: float,
+    frames: int,
+    test_views: int,
+) -> EmulatedCamera:
     """An emulated DAVIS346 with the gain of ``gain_exposure_us`` and DVS noise x ``noise_scale``.
 
     The camera is built as usual, then given the equal :class:`FixedGainConfig` (same fields,
     so the same trajectory), which every later frame and the truth read.
     """
-    camera = EmulatedCamera(scene, seed=seed, exposure_us=exposure_us, frames=frames,
-                            test_views=test_views, dvs_preset=_register_noise_preset(noise_scale))
+    camera = EmulatedCamera(
+        scene,
+        seed=seed,
+        exposure_us=exposure_us,
+        frames=frames,
+        test_views=test_views,
+        dvs_preset=_register_noise_preset(noise_scale),
+    )
     fields = dataclasses.asdict(camera.config)
     camera.config = FixedGainConfig(**fields, gain_exposure_us=gain_exposure_us)
-    camera.info.extra["emulator"].update(gain_exposure_us=gain_exposure_us,
-                                         noise_scale=noise_scale)
+    camera.info.extra["emulator"].update(gain_exposure_us=gain_exposure_us, noise_scale=noise_scale)
     return camera
 
 
@@ -75,8 +92,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, required=True, help="session folder (replaced)")
     parser.add_argument("--exposure-us", type=int, required=True, help="APS exposure, µs")
-    parser.add_argument("--gain-exposure-us", type=int, default=0,
-                        help="exposure that sets the gain, µs (0: the exposure itself)")
+    parser.add_argument(
+        "--gain-exposure-us",
+        type=int,
+        default=0,
+        help="exposure that sets the gain, µs (0: the exposure itself)",
+    )
     parser.add_argument("--noise-scale", type=float, default=1.0, help="DVS noise multiplier")
     parser.add_argument("--scene", default="room", help="built-in scene")
     parser.add_argument("--seed", type=int, default=1, help="emulator seed")
@@ -84,13 +105,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--test-views", type=int, default=8, help="held-out views")
     args = parser.parse_args(argv)
     start = time.perf_counter()
-    camera = bracket_camera(args.scene, args.seed, args.exposure_us, args.gain_exposure_us,
-                            args.noise_scale, args.frames, args.test_views)
+    camera = bracket_camera(
+        args.scene,
+        args.seed,
+        args.exposure_us,
+        args.gain_exposure_us,
+        args.noise_scale,
+        args.frames,
+        args.test_views,
+    )
     result = record(camera, args.out, overwrite=True, exposure_us=args.exposure_us)
     save_truth(camera.truth, args.out / "truth")
     manifest = result.manifest
-    print(f"{args.out}: {result.status}, {manifest.frame_count} frames, {manifest.event_count} "
-          f"events in {time.perf_counter() - start:.1f} s")
+    print(
+        f"{args.out}: {result.status}, {manifest.frame_count} frames, {manifest.event_count} "
+        f"events in {time.perf_counter() - start:.1f} s"
+    )
     return 0 if result.status == "complete" else 1
 
 

@@ -63,8 +63,9 @@ CAPTURE_BENCHES = (
             ),
             "dv_mev_s": Figure("dv-processing, M events/s", "dv_ev_s", 1e-6),
             "ratio": Figure("ours / dv-processing", "ratio"),
-            "python_lz4_ratio": Figure("ours with python-lz4 only / dv-processing",
-                                       "python_lz4_ratio"),
+            "python_lz4_ratio": Figure(
+                "ours with python-lz4 only / dv-processing", "python_lz4_ratio"
+            ),
         },
         {"ratio": (">=", 1.0)},
     ),

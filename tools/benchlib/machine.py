@@ -29,9 +29,11 @@ class Machine:
     def line(self) -> str:
         """One line for the report."""
         load = ", ".join(f"{value:.2f}" for value in self.load_average)
-        return (f"{self.cpu}, {self.cores} cores; {self.system}; Python {self.python}, numpy "
-                f"{self.numpy}, torch {self.torch} ({self.threads} threads), device {self.device}; "
-                f"load average at start {load}")
+        return (
+            f"{self.cpu}, {self.cores} cores; {self.system}; Python {self.python}, numpy "
+            f"{self.numpy}, torch {self.torch} ({self.threads} threads), device {self.device}; "
+            f"load average at start {load}"
+        )
 
 
 def cpu_model(cpuinfo_text: str) -> str:

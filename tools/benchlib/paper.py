@@ -46,7 +46,8 @@ class Claim:
 # Table 3 of the paper (ablation); columns: our synthetic data (HDR), our real data (HDR),
 # Real-World-Challenge data (deblurring). See-NeRF^Base is reported on the last one only.
 TABLE_3 = Comparison(
-    "table3", "Table 3: ablation",
+    "table3",
+    "Table 3: ablation",
     ("synthetic HDR", "real HDR", "Real-World-Challenge"),
     {
         "base": ("See-NeRF^Base", (None, None, (28.79, 0.9201))),
@@ -61,7 +62,8 @@ TABLE_3 = Comparison(
 # Supplementary Table 9 (earlier CRF models), upper half: the RGB CRF. Columns: our real data
 # (HDR), Real-World-Challenge data.
 TABLE_9_CRF = Comparison(
-    "table9-crf", "Table 9: RGB CRF models",
+    "table9-crf",
+    "Table 9: RGB CRF models",
     ("real HDR", "Real-World-Challenge"),
     {
         "power-crf": ("See-NeRF^Pow", ((19.75, 0.7239), (28.35, 0.9242))),
@@ -72,7 +74,8 @@ TABLE_9_CRF = Comparison(
 # Supplementary Table 9, lower half: the event low-pass (delay) model. The paper prints the
 # Deblur-e real-data SSIM as "8859", read here as .8859.
 TABLE_9_LOWPASS = Comparison(
-    "table9-lowpass", "Table 9: event low-pass models",
+    "table9-lowpass",
+    "Table 9: event low-pass models",
     ("real HDR", "Real-World-Challenge"),
     {
         "v2e-lowpass": ("See-NeRF^v2e", ((22.10, 0.8644), (30.51, 0.9441))),
@@ -84,7 +87,8 @@ TABLE_9_LOWPASS = Comparison(
 # Table 4 of the paper, left half: input exposure 0.001 s, 0.016 s, 0.256 s on the synthetic
 # "Catroom" scene (HDR).
 TABLE_4_EXPOSURE = Comparison(
-    "table4-exposure", "Table 4: input exposure",
+    "table4-exposure",
+    "Table 4: input exposure",
     ("synthetic HDR (Catroom)",),
     {
         "exposure-x1/16": ("0.001 s", ((24.66, 0.8886),)),
@@ -93,12 +97,13 @@ TABLE_4_EXPOSURE = Comparison(
     },
     axis="session",
     ours="Each row is `full` fitted on a room session filmed at 0.001, 0.016 or 0.256 s with the "
-         "sensor gain of 0.016 s (shorter is darker, longer clips), as the paper's sweep.",
+    "sensor gain of 0.016 s (shorter is darker, longer clips), as the paper's sweep.",
 )
 
 # Table 4 of the paper, right half: event noise x1, x2, x4 on the same scene (HDR).
 TABLE_4_NOISE = Comparison(
-    "table4-noise", "Table 4: event noise",
+    "table4-noise",
+    "Table 4: event noise",
     ("synthetic HDR (Catroom)",),
     {
         "noise-x1": ("x1", ((25.08, 0.8956),)),
@@ -107,11 +112,15 @@ TABLE_4_NOISE = Comparison(
     },
     axis="session",
     ours="Each row is `full` fitted on a 0.016 s room session whose DVS leak and shot-noise rates "
-         "(0.01 Hz and 0.001 Hz per pixel in the benchmark's `noisy` pixel model) are x1, x2, x4.",
+    "(0.01 Hz and 0.001 Hz per pixel in the benchmark's `noisy` pixel model) are x1, x2, x4.",
 )
 
 COMPARISONS: tuple[Comparison, ...] = (
-    TABLE_3, TABLE_9_CRF, TABLE_9_LOWPASS, TABLE_4_EXPOSURE, TABLE_4_NOISE,
+    TABLE_3,
+    TABLE_9_CRF,
+    TABLE_9_LOWPASS,
+    TABLE_4_EXPOSURE,
+    TABLE_4_NOISE,
 )
 """Every comparison of the report, in report order."""
 

@@ -21,8 +21,18 @@ __all__ = [
     "write_png",
 ]
 
-PALETTE = ((180, 119, 31), (14, 127, 255), (44, 160, 44), (40, 39, 214), (189, 103, 148),
-           (75, 86, 140), (194, 119, 227), (127, 127, 127), (34, 189, 188), (207, 190, 23))
+PALETTE = (
+    (180, 119, 31),
+    (14, 127, 255),
+    (44, 160, 44),
+    (40, 39, 214),
+    (189, 103, 148),
+    (75, 86, 140),
+    (194, 119, 227),
+    (127, 127, 127),
+    (34, 189, 188),
+    (207, 190, 23),
+)
 """Line colours (BGR), one per series in order; markers distinguish presets."""
 
 MARGIN = (80, 40, 40, 60)  # left, top, right, bottom, pixels
@@ -46,8 +56,9 @@ class Series:
     marker: str = "circle"
 
 
-def axis_position(value: float, low: float, high: float, start_px: int, end_px: int,
-                  log: bool = False) -> int:
+def axis_position(
+    value: float, low: float, high: float, start_px: int, end_px: int, log: bool = False
+) -> int:
     """Pixel coordinate of ``value`` on an axis running from ``low`` (at ``start_px``) to ``high``.
 
     With ``log`` the axis is logarithmic (``low`` and ``high`` must then be positive).
@@ -90,8 +101,9 @@ def _ranges(series: list[Series]) -> tuple[float, float, float, float]:
     return min(xs) / 1.5, max(xs) * 1.5, math.floor(min(ys) - 1), math.ceil(max(ys) + 1)
 
 
-def draw_speed_error(series: list[Series], y_label: str, *, width: int = 1000,
-                     height: int = 600, title: str = "") -> np.ndarray:
+def draw_speed_error(
+    series: list[Series], y_label: str, *, width: int = 1000, height: int = 600, title: str = ""
+) -> np.ndarray:
     """An ``(height, width, 3)`` uint8 BGR plot of each series against training time (log s)."""
     image = np.full((height, width, 3), 255, np.uint8)
     left, top = MARGIN[0], MARGIN[1]
@@ -106,23 +118,37 @@ def draw_speed_error(series: list[Series], y_label: str, *, width: int = 1000,
         cv2.line(image, (left, y), (right, y), GREY, 1)
         cv2.putText(image, f"{tick:g}", (left - 45, y + 5), FONT, 0.45, BLACK, 1, cv2.LINE_AA)
     cv2.rectangle(image, (left, top), (right, bottom), BLACK, 1)
-    cv2.putText(image, "training time (s, log scale)", ((left + right) // 2 - 110, height - 15),
-                FONT, 0.55, BLACK, 1, cv2.LINE_AA)
+    cv2.putText(
+        image,
+        "training time (s, log scale)",
+        ((left + right) // 2 - 110, height - 15),
+        FONT,
+        0.55,
+        BLACK,
+        1,
+        cv2.LINE_AA,
+    )
     cv2.putText(image, y_label, (10, top - 15), FONT, 0.55, BLACK, 1, cv2.LINE_AA)
     cv2.putText(image, title, (left + 150, top - 15), FONT, 0.55, BLACK, 1, cv2.LINE_AA)
     for index, line in enumerate(series):
         colour = PALETTE[index % len(PALETTE)]
-        pixels = [(axis_position(x, x_low, x_high, left, right, log=True),
-                   axis_position(y, y_low, y_high, bottom, top))
-                  for x, y in line.points if math.isfinite(y) and x > 0]
+        pixels = [
+            (
+                axis_position(x, x_low, x_high, left, right, log=True),
+                axis_position(y, y_low, y_high, bottom, top),
+            )
+            for x, y in line.points
+            if math.isfinite(y) and x > 0
+        ]
         if len(pixels) > 1:
             cv2.polylines(image, [np.array(pixels, np.int32)], False, colour, 2, cv2.LINE_AA)
         for pixel in pixels:
             _marker(image, pixel, line.marker, colour)
         legend_y = top + 10 + 22 * index
         _marker(image, (right + 30, legend_y), line.marker, colour)
-        cv2.putText(image, line.label, (right + 45, legend_y + 5), FONT, 0.45, BLACK, 1,
-                    cv2.LINE_AA)
+        cv2.putText(
+            image, line.label, (right + 45, legend_y + 5), FONT, 0.45, BLACK, 1, cv2.LINE_AA
+        )
     return image
 
 
@@ -139,12 +165,21 @@ def speed_error_figure(rows: list[RunRow], session: str) -> np.ndarray:
             runs.setdefault((row.preset, row.variant), []).append(row)
     height = max(600, 100 + 22 * len(runs))
     panels = []
-    for attribute, label in (("hdr_psnr", "HDR PSNR (dB)"),
-                             ("novel_psnr", "novel-exposure PSNR (dB)")):
-        series = [Series(f"{preset} / {variant}",
-                         tuple((r.train_s, getattr(r, attribute)) for r in sorted(
-                             found, key=lambda r: r.budget_s)), MARKERS.get(preset, "circle"))
-                  for (preset, variant), found in sorted(runs.items())]
+    for attribute, label in (
+        ("hdr_psnr", "HDR PSNR (dB)"),
+        ("novel_psnr", "novel-exposure PSNR (dB)"),
+    ):
+        series = [
+            Series(
+                f"{preset} / {variant}",
+                tuple(
+                    (r.train_s, getattr(r, attribute))
+                    for r in sorted(found, key=lambda r: r.budget_s)
+                ),
+                MARKERS.get(preset, "circle"),
+            )
+            for (preset, variant), found in sorted(runs.items())
+        ]
         panels.append(draw_speed_error(series, label, height=height, title=f"session {session}"))
     return np.vstack(panels)
 

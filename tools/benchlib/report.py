@@ -109,12 +109,16 @@ def judge_all(report: BenchReport) -> list[ComparisonVerdict]:
 def _seed_line(report: BenchReport) -> str:
     scores = seed_scores(report)
     if len(scores) < 2:
-        return (f"One run per row: differences under {TIE_DB:g} dB count as ties (the seed "
-                "spread was not measured).")
+        return (
+            f"One run per row: differences under {TIE_DB:g} dB count as ties (the seed "
+            "spread was not measured)."
+        )
     listed = ", ".join(f"seed {seed}: {fmt(score)}" for seed, score in scores)
-    return (f"Seed spread: `full` at this budget scored {listed} dB with nothing but the seed "
-            f"changed, a spread of {fmt(tie_limit(report))} dB; differences smaller than that "
-            "are ties, not orderings.")
+    return (
+        f"Seed spread: `full` at this budget scored {listed} dB with nothing but the seed "
+        f"changed, a spread of {fmt(tie_limit(report))} dB; differences smaller than that "
+        "are ties, not orderings."
+    )
 
 
 def _check(name: str, value: float | None, target: str, met: bool | None) -> list[str]:

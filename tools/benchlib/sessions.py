@@ -97,14 +97,36 @@ def _has_poses(folder: Path) -> bool:
 
 def _record_command(spec: SessionSpec, folder: Path, views: tuple[int, int]) -> list[str]:
     if spec.maker == "benchmark":
-        command = python_command(str(TOOLS_DIR / "make_benchmark.py"), "--out", str(folder.parent),
-                                 "--only", spec.key, "--no-aedat", "--overwrite")
+        command = python_command(
+            str(TOOLS_DIR / "make_benchmark.py"),
+            "--out",
+            str(folder.parent),
+            "--only",
+            spec.key,
+            "--no-aedat",
+            "--overwrite",
+        )
         return command + (["--quick"] if views == (4, 2) else [])
     return python_command(
-        "-m", "benchlib.bracket_session", "--out", str(folder), "--scene", spec.scene,
-        "--seed", str(spec.seed), "--exposure-us", str(spec.exposure_us),
-        "--gain-exposure-us", str(spec.gain_exposure_us), "--noise-scale", f"{spec.noise_scale:g}",
-        "--frames", str(views[0]), "--test-views", str(views[1]))
+        "-m",
+        "benchlib.bracket_session",
+        "--out",
+        str(folder),
+        "--scene",
+        spec.scene,
+        "--seed",
+        str(spec.seed),
+        "--exposure-us",
+        str(spec.exposure_us),
+        "--gain-exposure-us",
+        str(spec.gain_exposure_us),
+        "--noise-scale",
+        f"{spec.noise_scale:g}",
+        "--frames",
+        str(views[0]),
+        "--test-views",
+        str(views[1]),
+    )
 
 
 def _log_tail(path: Path) -> str:
@@ -112,8 +134,9 @@ def _log_tail(path: Path) -> str:
     return lines[-1] if lines else "no output"
 
 
-def prepare_session(spec: SessionSpec, root: Path, views: tuple[int, int], poses: str,
-                    log_dir: Path) -> SessionOutcome:
+def prepare_session(
+    spec: SessionSpec, root: Path, views: tuple[int, int], poses: str, log_dir: Path
+) -> SessionOutcome:
     """Record ``spec`` under ``root`` unless complete there, then store poses unless present.
 
     ``make_benchmark.py`` sessions are made with its fixed views (``--quick`` for 4 + 2);
@@ -125,16 +148,25 @@ def prepare_session(spec: SessionSpec, root: Path, views: tuple[int, int], poses
         _load_costs(outcome)
     else:
         log = log_dir / f"record-{spec.key}.log"
-        outcome.record = run_measured(_record_command(spec, folder, views), log, cwd=TOOLS_DIR,
-                                      timeout_s=SESSION_TIMEOUT_S)
+        outcome.record = run_measured(
+            _record_command(spec, folder, views), log, cwd=TOOLS_DIR, timeout_s=SESSION_TIMEOUT_S
+        )
         if outcome.record.returncode != 0 or not _is_complete(folder):
             outcome.error = f"recording failed: {_log_tail(log)} (log: {log})"
             return outcome
         outcome.record_s = outcome.record.wall_s
     if not _has_poses(folder):
         log = log_dir / f"poses-{spec.key}.log"
-        command = python_command("-m", "benchlib.poses_step", "--session", str(folder),
-                                 "--bins", str(BINS), "--source", poses)
+        command = python_command(
+            "-m",
+            "benchlib.poses_step",
+            "--session",
+            str(folder),
+            "--bins",
+            str(BINS),
+            "--source",
+            poses,
+        )
         outcome.poses = run_measured(command, log, cwd=TOOLS_DIR, timeout_s=SESSION_TIMEOUT_S)
         reported = re.search(r"poses \(\w+, b=\d+\): ([\d.]+) s", log.read_text(errors="replace"))
         if outcome.poses.returncode != 0 or reported is None:

@@ -48,14 +48,21 @@ class ComparisonVerdict:
     @property
     def summary(self) -> str:
         """``holds``, ``does not hold``, ``undecided`` or ``not measured``, with the counts."""
-        counts = {o: sum(c.outcome == o for c in self.claims)
-                  for o in ("holds", "reversed", "tie", "not measured")}
+        counts = {
+            o: sum(c.outcome == o for c in self.claims)
+            for o in ("holds", "reversed", "tie", "not measured")
+        }
         judged = len(self.claims) - counts["not measured"]
         if judged == 0:
             return "not measured"
-        extra = [f"{counts[o]} {word}" for o, word in (("tie", f"within {self.tie_db:.2f} dB"),
-                                                        ("not measured", "not measured"))
-                 if counts[o]]
+        extra = [
+            f"{counts[o]} {word}"
+            for o, word in (
+                ("tie", f"within {self.tie_db:.2f} dB"),
+                ("not measured", "not measured"),
+            )
+            if counts[o]
+        ]
         tail = f" ({'; '.join(extra)})" if extra else ""
         if counts["reversed"]:
             return f"does not hold: {counts['reversed']} of {judged} orderings reversed{tail}"
@@ -83,13 +90,17 @@ def explain_difference(better: RunRow, worse: RunRow) -> str:
     ]
     same_exposures = [e for e, _ in better.ldr_psnr] == [e for e, _ in worse.ldr_psnr]
     if better.ldr_psnr and same_exposures:
-        deltas = ", ".join(f"{e:g} s {a - b:+.2f}" for (e, a), (_, b)
-                           in zip(better.ldr_psnr, worse.ldr_psnr, strict=True))
+        deltas = ", ".join(
+            f"{e:g} s {a - b:+.2f}"
+            for (e, a), (_, b) in zip(better.ldr_psnr, worse.ldr_psnr, strict=True)
+        )
         parts.append(f"LDR PSNR difference per test exposure: {deltas} dB")
     if math.isfinite(better.fit_psnr) or math.isfinite(worse.fit_psnr):  # none before 1st eval
         parts.append(f"fit to the blurry input frames {_pair(better.fit_psnr, worse.fit_psnr)} dB")
-    parts.append("HDR PSNR before scale alignment "
-                 f"{_pair(better.hdr_unaligned_psnr, worse.hdr_unaligned_psnr)} dB")
+    parts.append(
+        "HDR PSNR before scale alignment "
+        f"{_pair(better.hdr_unaligned_psnr, worse.hdr_unaligned_psnr)} dB"
+    )
     return "; ".join(parts)
 
 
