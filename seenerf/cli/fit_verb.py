@@ -54,6 +54,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="delay filter reading: reference "
         "(first order on log radiance) or paper (second order on radiance)",
     )
+    parser.add_argument(
+        "--threshold",
+        type=float,
+        default=0.3,
+        help="effective DVS contrast threshold in log units (default 0.3, the reference's); "
+        "raise it when the sensor's events undercount contrast (refractory period, low "
+        "bandwidth in the dark)",
+    )
     parser.add_argument("--run", default=None, help="run folder name under session/fit/")
     parser.add_argument("--fresh", action="store_true", help="start over instead of resuming")
     parser.add_argument("--seed", type=int, default=0, help="random seed")
@@ -80,6 +88,7 @@ def run(args: argparse.Namespace) -> int:
         device=args.device,
         bins=args.bins,
         low_pass=args.low_pass,
+        threshold=args.threshold,
         seed=args.seed,
         threads=args.threads,
         register_test_views=not args.no_registration,

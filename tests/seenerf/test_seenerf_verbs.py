@@ -1,3 +1,4 @@
+import argparse
 import json
 import subprocess
 import sys
@@ -6,6 +7,7 @@ import pytest
 
 from davis_io.cli import VERBS
 from davis_io.errors import UsageError
+from seenerf.cli import fit_verb
 from seenerf.cli.fit_verb import format_scores, parse_budget_s
 from seenerf.config import FitConfig
 from seenerf.fit import fit_data
@@ -47,3 +49,21 @@ def test_fit_writes_every_output(tiny_scene, tmp_path):
     transforms = json.loads((run / "transforms.json").read_text())
     assert len(transforms["frames"]) == len(tiny_scene.test.c2w)
     assert "novel exposures" in format_scores(metrics)
+
+
+def test_fit_verb_passes_the_contrast_threshold_to_the_fit(monkeypatch, tmp_path):
+    import seenerf.fit
+
+    seen = {}
+
+    def fake_fit_session(session, config, run_name=None, fresh=False):
+        seen["config"] = config
+        raise SystemExit(0)
+
+    monkeypatch.setattr(seenerf.fit, "fit_session", fake_fit_session)
+    parser = argparse.ArgumentParser()
+    fit_verb.add_arguments(parser)
+    with pytest.raises(SystemExit):
+        fit_verb.run(parser.parse_args([str(tmp_path), "--threshold", "0.35"]))
+    assert seen["config"].threshold == pytest.approx(0.35)
+    assert parser.parse_args([str(tmp_path)]).threshold == pytest.approx(0.3)

@@ -7,7 +7,7 @@ import torch
 from seenerf.builder import build_model
 from seenerf.config import FitConfig
 from seenerf.errors import CheckpointError, ConfigError
-from seenerf.presets import PRESETS
+from seenerf.presets import PRESETS, size_field
 from seenerf.synthetic import plane_scene
 from seenerf.trainer import Trainer
 from seenerf.variants import VARIANTS
@@ -83,6 +83,16 @@ def test_unknown_names_list_the_known_ones():
         _config(variant="nope").validate()
     with pytest.raises(ConfigError, match="fast"):
         _config(preset="nope").validate()
+
+
+def test_field_resolution_follows_the_pixel_span_of_each_axis_within_the_cap():
+    resized = size_field(PRESETS["fast"], (418.2, 30.0, 92.9))
+    assert resized.field_args["resolution"] == [418, 48, 92]
+    assert (
+        size_field(PRESETS["fast"], (9000.0,) * 3).field_args["resolution"]
+        == [PRESETS["fast"].max_resolution] * 3
+    )
+    assert size_field(PRESETS["paper"], (418.2, 30.0, 92.9)) is PRESETS["paper"]
 
 
 def test_killed_fit_resumes_in_place(tiny_scene, tmp_path):
