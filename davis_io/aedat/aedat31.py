@@ -92,8 +92,9 @@ class Aedat31Reader(FileReader):
             if len(payload) < size:
                 notes.append(
                     warn_note(
-                        f"{self.path}: file truncated at byte offset {offset}: packet {index} needs "
-                        f"{size} payload bytes, {len(payload)} remain; its complete events are kept"
+                        f"{self.path}: file truncated at byte offset {offset}: packet {index} "
+                        f"needs {size} payload bytes, {len(payload)} remain; its complete events "
+                        "are kept"
                     )
                 )
             try:

@@ -142,15 +142,8 @@ class EmulatedBackend(usb.backend.IBackend):
         buff[: len(data)] = array.array("B", data)
         return len(data)
 
-    def ctrl_transfer(
-        self,
-        dev_handle,
-        bmRequestType,
-        bRequest,
-        wValue,
-        wIndex,
-        data,  # noqa: D102, N803
-        timeout,
+    def ctrl_transfer(  # noqa: D102
+        self, dev_handle, bmRequestType, bRequest, wValue, wIndex, data, timeout
     ):
         if not dev_handle.connected:
             raise usb_error("gone")
