@@ -10,7 +10,7 @@ import torch
 from seenerf.config import FitConfig
 from seenerf.data import TrainingData
 from seenerf.errors import ConfigError
-from seenerf.frustum import box_pixel_spans, forward_facing_space, frustum_box
+from seenerf.frustum import forward_facing_space, frustum_box
 from seenerf.model import SeeNerfModel
 from seenerf.presets import Preset, get_preset, size_field
 from seenerf.radiance import RadianceRenderer
@@ -81,12 +81,12 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
     if space is not None:
         box = frustum_box(space, poses, data.intrinsics, bounds, data.image_size)
         view_bounds = np.array([space.near, 1.5 * float(bounds[1])])
-        preset = size_field(preset, box_pixel_spans(space, box, poses, data.image_size))
+        preset = size_field(preset, box.size / 2.0 * data.image_size[1])  # image: 2 NDC units
     else:
         box = scene_box_from_cameras(poses, data.intrinsics, bounds, data.image_size)
         view_bounds = bounds
         median_depth = float(np.sqrt(bounds[0] * bounds[1]))
-        preset = size_field(preset, (float(data.intrinsics[0]) * box.size / median_depth,) * 3)
+        preset = size_field(preset, float(data.intrinsics[0]) * box.size / median_depth)
     renderer = RadianceRenderer(preset.field, preset.field_args, preset.sampler, box, space)
     if renderer.grid is not None:
 

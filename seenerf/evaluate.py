@@ -8,7 +8,15 @@ import numpy as np
 import torch
 import torch.nn.functional as F  # noqa: N812
 
-__all__ = ["align_channel_scale", "hdr_metrics", "ldr_metrics", "psnr", "ssim", "tone_map_pair"]
+__all__ = [
+    "align_channel_scale",
+    "hdr_metrics",
+    "ldr_metrics",
+    "log_contrast",
+    "psnr",
+    "ssim",
+    "tone_map_pair",
+]
 
 
 def psnr(predicted: np.ndarray, truth: np.ndarray, data_range: float = 1.0) -> float:
@@ -109,6 +117,31 @@ def hdr_metrics(predicted: list[np.ndarray], truth: list[np.ndarray], align: boo
         "views": len(pairs),
         "scale": np.atleast_1d(scale).tolist(),
     }
+
+
+def log_contrast(predicted: np.ndarray, truth: np.ndarray) -> list[float]:
+    """Per channel, the slope of ln(predicted) against ln(truth): 1 when contrast is right.
+
+    A single exposure leaves the field's log contrast free (the learned CRF can stretch to
+    match any), and only the events pin it; a slope under 1 means contrast was compressed, which
+    brightens shadows at long exposures. Fitted by least squares over the pixels whose truth
+    lies between its 5th and 99th percentile (away from black and clipped highlights).
+
+    Args:
+        predicted: linear HDR ``(..., C)``, positive.
+        truth: reference of the same shape.
+    """
+    channels = np.asarray(truth).shape[-1]
+    log_predicted = np.log(np.maximum(np.asarray(predicted, np.float64), 1e-12))
+    log_truth = np.log(np.maximum(np.asarray(truth, np.float64), 1e-12))
+    slopes = []
+    for c in range(channels):
+        x, y = log_truth[..., c].ravel(), log_predicted[..., c].ravel()
+        low, high = np.quantile(x, [0.05, 0.99])
+        keep = (x > low) & (x < high)
+        x, y = x[keep] - x[keep].mean(), y[keep] - y[keep].mean()
+        slopes.append(float((x @ y) / max(float(x @ x), 1e-12)))
+    return slopes
 
 
 def ldr_metrics(predicted: list[np.ndarray], truth: list[np.ndarray]) -> dict:

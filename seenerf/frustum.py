@@ -19,7 +19,7 @@ import torch
 
 from seenerf.rays import SceneBox
 
-__all__ = ["FrustumSpace", "box_pixel_spans", "forward_facing_space", "frustum_box"]
+__all__ = ["FrustumSpace", "forward_facing_space", "frustum_box"]
 
 MAX_VIEW_ANGLE_DEG = 25.0
 """A camera whose optical axis turns further than this from the mean one is not forward-facing."""
@@ -165,22 +165,3 @@ def frustum_box(
     half = 0.525 * (high - low).max()
     centre = (low + high) / 2
     return SceneBox(tuple(float(c) for c in centre - half), tuple(float(c) for c in centre + half))
-
-
-def box_pixel_spans(
-    space: FrustumSpace, box: SceneBox, c2w: np.ndarray, image_size: tuple[int, int]
-) -> tuple[float, float, float]:
-    """Sensor pixels across an NDC box along x', y' and z': how finely the frames resolve it.
-
-    Across the image, x' and y' span W and H pixels per 2 NDC units. Along z' a point moves in
-    the images only by parallax: between cameras ``B`` apart sideways it shifts by
-    ``fx B / (2 near)`` pixels per NDC unit, ``B`` the diagonal of the rectangle the camera
-    centres span sideways.
-    """
-    height, width = image_size
-    w2c = np.asarray(space.w2c)
-    centres = np.asarray(c2w, np.float64).reshape(-1, 4, 4)[:, :3, 3] @ w2c[:, :3].T
-    spread = float(np.linalg.norm(np.ptp(centres[:, :2], axis=0)))
-    fx = space.scale_x * width / 2.0
-    size = box.size
-    return size * width / 2.0, size * height / 2.0, size * fx * spread / (2.0 * space.near)

@@ -11,7 +11,7 @@ import torch
 
 from davis_io.poses.align import Similarity, rotation_error_deg
 from seenerf.data import TrainingData
-from seenerf.evaluate import align_channel_scale, hdr_metrics, ldr_metrics
+from seenerf.evaluate import align_channel_scale, hdr_metrics, ldr_metrics, log_contrast
 from seenerf.export import (
     crf_plot,
     tone_mapped_preview,
@@ -103,6 +103,7 @@ def score_views(views: RenderedViews, data: TrainingData) -> dict:
     scores = {
         "hdr": hdr_metrics(views.hdr, truth_hdr, align=True),
         "hdr_unaligned": hdr_metrics(views.hdr, truth_hdr, align=False),
+        "log_contrast": log_contrast(np.stack(views.hdr), np.stack(truth_hdr)),
         "ldr": {},
     }
     lpips, scores["lpips"] = lpips_scorer()

@@ -13,48 +13,30 @@ _LINE_AXIS = [2, 1, 0]
 
 
 def sample_vector_matrix(
-    planes: list[torch.Tensor], lines: list[torch.Tensor], points: torch.Tensor
+    planes: torch.Tensor, lines: torch.Tensor, points: torch.Tensor
 ) -> torch.Tensor:
     """Sum over the three axis pairs of plane(u, v) * line(w), bilinear/linear interpolated.
 
     Args:
-        planes: features on the xy, xz and yz planes, ``(C, Ny, Nx)``, ``(C, Nz, Nx)`` and
-            ``(C, Nz, Ny)``.
-        lines: features along z, y and x, ``(C, Nz, 1)``, ``(C, Ny, 1)`` and ``(C, Nx, 1)``.
+        planes: ``(3, C, N, N)`` features on the xy, xz and yz planes.
+        lines: ``(3, C, N, 1)`` features along z, y and x.
         points: ``(P, 3)`` box coordinates in ``[-1, 1]``.
 
     Returns:
         ``(P, C)`` features.
     """
-    features = None
-    for plane, line, axes, axis in zip(planes, lines, _PLANE_AXES, _LINE_AXIS, strict=True):
-        plane_uv = points[None, None, :, axes]
-        w = points[:, axis]
-        line_uv = torch.stack([torch.zeros_like(w), w], dim=-1)[None, None]
-        product = F.grid_sample(plane[None], plane_uv, align_corners=True) * F.grid_sample(
-            line[None], line_uv, align_corners=True
-        )
-        features = product if features is None else features + product
-    return features[0, :, 0].T
+    plane_uv = torch.stack([points[:, axes] for axes in _PLANE_AXES])
+    line_w = points[:, _LINE_AXIS].T
+    line_uv = torch.stack([torch.zeros_like(line_w), line_w], dim=-1)
+    plane_features = F.grid_sample(planes, plane_uv[:, None], align_corners=True)
+    line_features = F.grid_sample(lines, line_uv[:, None], align_corners=True)
+    return (plane_features * line_features).sum(dim=0)[:, 0].T
 
 
-def _factors(
-    channels: int, resolution: tuple[int, int, int], generator: torch.Generator, scale: float
-) -> tuple[nn.ParameterList, nn.ParameterList]:
-    nx, ny, nz = resolution
-    plane_shapes = ((ny, nx), (nz, nx), (nz, ny))
-    line_lengths = (nz, ny, nx)
-    planes = [scale * torch.randn(channels, *shape, generator=generator) for shape in plane_shapes]
-    lines = [scale * torch.randn(channels, n, 1, generator=generator) for n in line_lengths]
-    return nn.ParameterList(planes), nn.ParameterList(lines)
-
-
-def _squared_steps(factor: torch.Tensor) -> torch.Tensor:
-    """Mean squared difference of neighbouring texels along each spatial axis, summed."""
-    total = (factor[:, 1:] - factor[:, :-1]).square().mean()
-    if factor.shape[-1] > 1:
-        total = total + (factor[..., 1:] - factor[..., :-1]).square().mean()
-    return total
+def _factors(channels: int, resolution: int, generator: torch.Generator, scale: float):
+    planes = scale * torch.randn(3, channels, resolution, resolution, generator=generator)
+    lines = scale * torch.randn(3, channels, resolution, 1, generator=generator)
+    return nn.Parameter(planes), nn.Parameter(lines)
 
 
 class VectorMatrixField(nn.Module):
@@ -64,8 +46,7 @@ class VectorMatrixField(nn.Module):
     the first rendering stage) costs a fraction of a full query.
 
     Args:
-        resolution: texels along x, y and z (one number: the same along all three), sized from
-            the scene and the sensor.
+        resolution: plane side and line length N, sized from the scene and the sensor.
         density_rank: feature channels of the density.
         appearance_rank: feature channels feeding the radiance decoder.
         hidden: width of the radiance decoder's hidden layer.
@@ -73,17 +54,16 @@ class VectorMatrixField(nn.Module):
 
     def __init__(
         self,
-        resolution: int | tuple[int, int, int] | list[int] = 128,
+        resolution: int = 128,
         density_rank: int = 8,
         appearance_rank: int = 24,
         hidden: int = 64,
     ):
         super().__init__()
-        sides = (resolution,) * 3 if isinstance(resolution, int) else tuple(resolution)
         generator = torch.Generator().manual_seed(0)
-        self.density_planes, self.density_lines = _factors(density_rank, sides, generator, 0.1)
+        self.density_planes, self.density_lines = _factors(density_rank, resolution, generator, 0.1)
         self.appearance_planes, self.appearance_lines = _factors(
-            appearance_rank, sides, generator, 0.1
+            appearance_rank, resolution, generator, 0.1
         )
         self.decoder = nn.Sequential(
             nn.Linear(appearance_rank, hidden), nn.ReLU(), nn.Linear(hidden, 3)
@@ -108,15 +88,13 @@ class VectorMatrixField(nn.Module):
         return self.density(points), self.radiance(points, directions)
 
     def smoothness(self) -> torch.Tensor:
-        """Total variation: mean squared difference of neighbouring texels.
-
-        Averaged over the three planes and over the three lines, of density and of appearance.
-        """
-        total = self.density_planes[0].new_zeros(())
+        """Mean squared difference of neighbouring plane and line texels (total variation)."""
+        total = self.density_planes.new_zeros(())
         for planes, lines in (
             (self.density_planes, self.density_lines),
             (self.appearance_planes, self.appearance_lines),
         ):
-            total = total + sum(_squared_steps(plane) for plane in planes) / 3.0
-            total = total + sum(_squared_steps(line) for line in lines) / 3.0
+            total = total + (planes[..., 1:, :] - planes[..., :-1, :]).square().mean()
+            total = total + (planes[..., 1:] - planes[..., :-1]).square().mean()
+            total = total + (lines[:, :, 1:] - lines[:, :, :-1]).square().mean()
         return total

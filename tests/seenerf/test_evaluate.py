@@ -3,7 +3,14 @@ import math
 import numpy as np
 import pytest
 
-from seenerf.evaluate import align_channel_scale, hdr_metrics, psnr, ssim, tone_map_pair
+from seenerf.evaluate import (
+    align_channel_scale,
+    hdr_metrics,
+    log_contrast,
+    psnr,
+    ssim,
+    tone_map_pair,
+)
 
 
 def test_psnr_by_hand():
@@ -85,3 +92,11 @@ def test_crf_error_of_a_monochrome_sensor_compares_only_the_curve_it_uses():
     model = SimpleNamespace(crf=lambda x: torch.as_tensor(true_response((x + offsets).numpy())))
     error = crf_error(model, scene, views)
     assert error["channels"] == [0] and len(error["rms"]) == 1 and error["rms"][0] < 2e-3
+
+
+def test_log_contrast_recovers_a_power_law_per_channel():
+    truth = np.random.default_rng(0).uniform(0.01, 20.0, size=(2, 30, 40, 3))
+    predicted = np.stack(
+        [3.0 * truth[..., 0] ** 0.8, truth[..., 1], 0.5 * truth[..., 2] ** 1.25], -1
+    )
+    np.testing.assert_allclose(log_contrast(predicted, truth), [0.8, 1.0, 1.25], rtol=1e-9)

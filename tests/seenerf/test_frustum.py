@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import torch
 
-from seenerf.frustum import box_pixel_spans, forward_facing_space, frustum_box
-from seenerf.rays import SceneBox, camera_rays
+from seenerf.frustum import forward_facing_space, frustum_box
+from seenerf.rays import camera_rays
 
 INTRINSICS = np.array([100.0, 100.0, 49.5, 39.5])
 IMAGE = (80, 100)
@@ -88,20 +88,9 @@ def test_the_box_holds_every_view_between_near_and_far():
 
 
 def test_a_ray_going_backwards_misses_every_box():
-    from seenerf.rays import intersect_box
+    from seenerf.rays import SceneBox, intersect_box
 
     space = forward_facing_space(np.stack([_pose()]), INTRINSICS, BOUNDS, IMAGE)
     origins, directions = space.rays(torch.tensor([[0.0, 0.0, -5.0]]), torch.tensor([[0, 0, -1.0]]))
     entry, exit_ = intersect_box(origins, directions, SceneBox((-3.0,) * 3, (3.0,) * 3), 0.0, 1.0)
     assert torch.isfinite(origins).all() and float(exit_ - entry) == 0.0
-
-
-def test_pixel_spans_of_a_box_by_hand():
-    poses = np.stack([_pose(0.0, (-0.3, 0.0, 0.0)), _pose(0.0, (0.3, 0.4, 0.0))])
-    space = forward_facing_space(poses, INTRINSICS, BOUNDS, IMAGE)
-    box = SceneBox((-1.2,) * 3, (1.2,) * 3)
-    spans = box_pixel_spans(space, box, poses, IMAGE)
-    # x', y': 100 and 80 pixels per 2 NDC units; z': parallax of cameras 0.5 apart sideways
-    # (the 0.6 x 0.4 rectangle's diagonal is sqrt(0.52)) at near 1.6: fx B / (2 near) per unit.
-    parallax_per_unit = 100.0 * math.sqrt(0.52) / (2.0 * 1.6)
-    np.testing.assert_allclose(spans, [120.0, 96.0, 2.4 * parallax_per_unit], rtol=1e-6)

@@ -104,19 +104,6 @@ def test_vector_matrix_sampling_by_hand():
     assert torch.allclose(features, torch.full((5, 2), 6.0))  # 3 pairs x (1 x 2)
 
 
-def test_vector_matrix_with_a_resolution_per_axis_by_hand():
-    # x: 5 texels, y: 3, z: 2. The xy plane holds x, the z line 1 + z; the others are zero.
-    x_texels = torch.linspace(-1, 1, 5)
-    planes = [x_texels.expand(3, 5)[None], torch.zeros(1, 2, 5), torch.zeros(1, 2, 3)]
-    lines = [torch.tensor([0.0, 2.0])[None, :, None], torch.zeros(1, 3, 1), torch.zeros(1, 5, 1)]
-    points = torch.tensor([[0.25, -0.3, 0.5], [-1.0, 1.0, -1.0]])
-    features = sample_vector_matrix(planes, lines, points)
-    assert torch.allclose(features[:, 0], torch.tensor([0.25 * 1.5, -1.0 * 0.0]))
-    field = VectorMatrixField(resolution=(5, 3, 2), density_rank=1, appearance_rank=2, hidden=4)
-    assert [tuple(p.shape) for p in field.appearance_planes] == [(2, 3, 5), (2, 2, 5), (2, 2, 3)]
-    assert [tuple(p.shape) for p in field.appearance_lines] == [(2, 2, 1), (2, 3, 1), (2, 5, 1)]
-
-
 def test_positional_encoding_dimensions():
     assert positional_encoding(torch.zeros(2, 3), 10).shape == (2, 63)
     assert positional_encoding(torch.zeros(2, 3), 4).shape == (2, 27)

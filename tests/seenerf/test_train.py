@@ -85,14 +85,12 @@ def test_unknown_names_list_the_known_ones():
         _config(preset="nope").validate()
 
 
-def test_field_resolution_follows_the_pixel_span_of_each_axis_within_the_cap():
-    resized = size_field(PRESETS["fast"], (418.2, 30.0, 92.9))
-    assert resized.field_args["resolution"] == [418, 48, 92]
-    assert (
-        size_field(PRESETS["fast"], (9000.0,) * 3).field_args["resolution"]
-        == [PRESETS["fast"].max_resolution] * 3
-    )
-    assert size_field(PRESETS["paper"], (418.2, 30.0, 92.9)) is PRESETS["paper"]
+def test_field_resolution_follows_the_pixel_span_within_its_bounds():
+    fast = PRESETS["fast"]
+    assert size_field(fast, 150.4).field_args["resolution"] == 150
+    assert size_field(fast, 30.0).field_args["resolution"] == 48
+    assert size_field(fast, 9000.0).field_args["resolution"] == fast.max_resolution
+    assert size_field(PRESETS["paper"], 150.4) is PRESETS["paper"]
 
 
 def test_killed_fit_resumes_in_place(tiny_scene, tmp_path):
