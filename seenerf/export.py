@@ -24,6 +24,7 @@ OPENCV_TO_OPENGL = np.diag([1.0, -1.0, -1.0, 1.0])
 """Right-multiply an OpenCV camera-to-world (x right, y down, z forward) to get OpenGL axes."""
 
 _CHANNEL_COLOURS = ((60, 60, 230), (60, 180, 60), (230, 90, 40))  # BGR of the R, G, B curves
+_MONO_COLOUR = (70, 70, 70)  # BGR of a monochrome sensor's one curve
 
 
 def write_exr(path: Path, image: np.ndarray, metadata: dict[str, str | float]) -> None:
@@ -55,6 +56,7 @@ def crf_plot(
     path: Path,
     learned: tuple[np.ndarray, np.ndarray],
     true: tuple[np.ndarray, np.ndarray] | None,
+    channels: tuple[int, ...] = (0, 1, 2),
     size: tuple[int, int] = (640, 420),
 ) -> None:
     """Draw response curves: learned solid, true dashed (when known); x = ln(radiance x s).
@@ -62,7 +64,8 @@ def crf_plot(
     Args:
         path: PNG to write.
         learned: ``(K,)`` log exposures and ``(K, 3)`` learned LDR values.
-        true: the same for the true response, or None.
+        true: the same for the true response (``(K, 1)`` for a monochrome one), or None.
+        channels: the curves the sensor's pixels go through; one alone is drawn grey.
         size: ``(width, height)`` of the image in pixels.
     """
     width, height = size
@@ -77,11 +80,12 @@ def crf_plot(
         return np.stack([px, py], axis=-1).round().astype(np.int32)
 
     cv2.rectangle(canvas, (margin, margin), (width - margin, height - margin), (0, 0, 0), 1)
-    for channel, colour in enumerate(_CHANNEL_COLOURS):
+    for channel in channels:
+        colour = _CHANNEL_COLOURS[channel] if len(channels) > 1 else _MONO_COLOUR
         points = to_pixel(learned[0], learned[1][:, channel])
         cv2.polylines(canvas, [points], False, colour, 2, cv2.LINE_AA)
         if true is not None:
-            dashed = to_pixel(true[0], true[1][:, channel])
+            dashed = to_pixel(true[0], true[1][:, min(channel, true[1].shape[1] - 1)])
             for start in range(0, len(dashed) - 1, 2):
                 cv2.line(
                     canvas, tuple(dashed[start]), tuple(dashed[start + 1]), colour, 1, cv2.LINE_AA

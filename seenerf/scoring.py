@@ -219,10 +219,11 @@ def _true_crf(data: TrainingData) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 def plot_crf(model: SeeNerfModel, data: TrainingData, views: RenderedViews, path: Path) -> None:
-    """The learned response beside the true one, when the model has one."""
+    """The learned response beside the true one, when the model has one: the curves in use."""
     learned = learned_crf(model, data, views)
     if learned is not None:
-        crf_plot(path, learned, _true_crf(data))
+        channels = tuple(int(c) for c in np.unique(data.channel))
+        crf_plot(path, learned, _true_crf(data), channels)
 
 
 def crf_error(model: SeeNerfModel, data: TrainingData, views: RenderedViews) -> dict | None:

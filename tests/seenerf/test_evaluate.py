@@ -100,3 +100,23 @@ def test_log_contrast_recovers_a_power_law_per_channel():
         [3.0 * truth[..., 0] ** 0.8, truth[..., 1], 0.5 * truth[..., 2] ** 1.25], -1
     )
     np.testing.assert_allclose(log_contrast(predicted, truth), [0.8, 1.0, 1.25], rtol=1e-9)
+
+
+def test_crf_plot_draws_only_the_curves_in_use(tmp_path):
+    import cv2
+
+    from seenerf.export import crf_plot
+
+    x = np.linspace(-6.0, 4.0, 50)
+    curve = 1.0 / (1.0 + np.exp(-x))
+    learned = (x, np.stack([curve, curve**0.8, curve**1.2], axis=1))
+    true = (x, curve[:, None])
+    crf_plot(tmp_path / "mono.png", learned, true, channels=(0,))
+    crf_plot(tmp_path / "rgb.png", learned, true)
+    mono = cv2.imread(str(tmp_path / "mono.png")).astype(int)
+    rgb = cv2.imread(str(tmp_path / "rgb.png")).astype(int)
+    assert _coloured_pixels(mono) == 0 and _coloured_pixels(rgb) > 500
+
+
+def _coloured_pixels(image):
+    return int((image.max(-1) - image.min(-1) > 60).sum())
