@@ -33,6 +33,37 @@ def sample_vector_matrix(
     return (plane_features * line_features).sum(dim=0)[:, 0].T
 
 
+class _SquaredSteps(torch.autograd.Function):
+    """Sum over the last two axes of the mean squared difference of neighbouring texels.
+
+    The gradient is written out (each difference added to one neighbour and taken from the
+    other) instead of autograd's slice copies: a third of the time on a field's texels.
+    """
+
+    @staticmethod
+    def forward(ctx, factor: torch.Tensor) -> torch.Tensor:
+        ctx.save_for_backward(factor)
+        total = factor.new_zeros(())
+        for dim in (-2, -1):
+            if factor.shape[dim] > 1:
+                steps = factor.diff(dim=dim).flatten()
+                total = total + torch.dot(steps, steps) / steps.numel()
+        return total
+
+    @staticmethod
+    def backward(ctx, grad: torch.Tensor) -> torch.Tensor:
+        (factor,) = ctx.saved_tensors
+        result = torch.zeros_like(factor)
+        for dim in (-2, -1):
+            length = factor.shape[dim]
+            if length > 1:
+                steps = factor.diff(dim=dim)
+                steps.mul_(2.0 * grad / steps.numel())
+                result.narrow(dim, 1, length - 1).add_(steps)
+                result.narrow(dim, 0, length - 1).sub_(steps)
+        return result
+
+
 def _factors(channels: int, resolution: int, generator: torch.Generator, scale: float):
     planes = scale * torch.randn(3, channels, resolution, resolution, generator=generator)
     lines = scale * torch.randn(3, channels, resolution, 1, generator=generator)
@@ -89,12 +120,10 @@ class VectorMatrixField(nn.Module):
 
     def smoothness(self) -> torch.Tensor:
         """Mean squared difference of neighbouring plane and line texels (total variation)."""
-        total = self.density_planes.new_zeros(())
-        for planes, lines in (
-            (self.density_planes, self.density_lines),
-            (self.appearance_planes, self.appearance_lines),
-        ):
-            total = total + (planes[..., 1:, :] - planes[..., :-1, :]).square().mean()
-            total = total + (planes[..., 1:] - planes[..., :-1]).square().mean()
-            total = total + (lines[:, :, 1:] - lines[:, :, :-1]).square().mean()
-        return total
+        factors = (
+            self.density_planes,
+            self.density_lines,
+            self.appearance_planes,
+            self.appearance_lines,
+        )
+        return sum(_SquaredSteps.apply(factor) for factor in factors)

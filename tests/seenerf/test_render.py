@@ -104,6 +104,17 @@ def test_vector_matrix_sampling_by_hand():
     assert torch.allclose(features, torch.full((5, 2), 6.0))  # 3 pairs x (1 x 2)
 
 
+def test_smoothness_by_hand_and_its_written_out_gradient():
+    from seenerf.fields.factorised import _SquaredSteps
+
+    line = torch.tensor([[[0.0], [1.0], [3.0]]])  # steps 1 and 2 along the line
+    assert _SquaredSteps.apply(line).item() == pytest.approx(2.5)
+    plane = torch.tensor([[[0.0, 2.0], [1.0, 1.0]]])  # rows: 1, -1; columns: 2, 0
+    assert _SquaredSteps.apply(plane).item() == pytest.approx(1.0 + 2.0)
+    factor = torch.randn(2, 3, 5, 4, dtype=torch.float64, requires_grad=True)
+    assert torch.autograd.gradcheck(_SquaredSteps.apply, (factor,))
+
+
 def test_positional_encoding_dimensions():
     assert positional_encoding(torch.zeros(2, 3), 10).shape == (2, 63)
     assert positional_encoding(torch.zeros(2, 3), 4).shape == (2, 27)
