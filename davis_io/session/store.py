@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import signal
+import threading
 from pathlib import Path
 
 import h5py
@@ -76,6 +78,12 @@ class Session(Closing):
         try:
             return cls(folder, manifest, h5py.File(h5_path, "r", swmr=True), needs_repair=True)
         except OSError as error:
+            if "not already open for SWMR writing" in str(error):
+                raise SessionError(
+                    f"{h5_path}: a process adding bins or poses was killed with the file open; "
+                    f"the recording is intact: clear the open flag with `h5clear -s {h5_path}` "
+                    "(HDF5's hdf5-tools) and run the step again"
+                ) from error
             raise SessionError(f"{h5_path}: HDF5 cannot read it ({error})") from error
 
     def close(self) -> None:
@@ -269,24 +277,43 @@ class Session(Closing):
         return _WritableSession(self)
 
 
+def _exit_on_terminate(signum: int, frame) -> None:
+    raise SystemExit(128 + signum)
+
+
 class _WritableSession:
-    """Context that swaps a session's read-only HDF5 handle for a writable one and back."""
+    """Context that swaps a session's read-only HDF5 handle for a writable one and back.
+
+    A file open for writing that is never closed stays flagged as open, and HDF5 then refuses
+    to read it; so while it is open, SIGTERM (``kill``, a scheduler's stop) ends the process
+    through the normal exit path, which closes the file, as Ctrl-C already does.
+    """
 
     def __init__(self, session: Session):
         self._session = session
+        self._previous_handler = None
 
     def __enter__(self) -> h5py.File:
+        if threading.current_thread() is threading.main_thread():
+            self._previous_handler = signal.signal(signal.SIGTERM, _exit_on_terminate)
         self._session._h5.close()
         try:
             self._session._h5 = h5py.File(self._session.h5_path, "r+")
         except OSError as error:
             self._session._h5 = h5py.File(self._session.h5_path, "r")
+            self._restore_handler()
             raise SessionError(f"{self._session.h5_path}: cannot write ({error})") from error
         return self._session._h5
 
     def __exit__(self, exc_type, exc, tb) -> None:
         self._session._h5.close()
         self._session._h5 = h5py.File(self._session.h5_path, "r")
+        self._restore_handler()
+
+    def _restore_handler(self) -> None:
+        if self._previous_handler is not None:
+            signal.signal(signal.SIGTERM, self._previous_handler)
+            self._previous_handler = None
 
 
 def _read_records(group: h5py.Group | None, dtype: np.dtype) -> np.ndarray:
