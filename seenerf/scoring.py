@@ -218,12 +218,16 @@ def _true_crf(data: TrainingData) -> tuple[np.ndarray, np.ndarray] | None:
     return np.asarray(truth.crf_log_exposure), np.asarray(truth.crf_value)
 
 
+def _channels_in_use(data: TrainingData) -> tuple[int, ...]:
+    """The response curves the sensor's pixels go through (a monochrome sensor: the first)."""
+    return tuple(int(c) for c in np.unique(data.channel))
+
+
 def plot_crf(model: SeeNerfModel, data: TrainingData, views: RenderedViews, path: Path) -> None:
     """The learned response beside the true one, when the model has one: the curves in use."""
     learned = learned_crf(model, data, views)
     if learned is not None:
-        channels = tuple(int(c) for c in np.unique(data.channel))
-        crf_plot(path, learned, _true_crf(data), channels)
+        crf_plot(path, learned, _true_crf(data), _channels_in_use(data))
 
 
 def crf_error(model: SeeNerfModel, data: TrainingData, views: RenderedViews) -> dict | None:
@@ -239,7 +243,7 @@ def crf_error(model: SeeNerfModel, data: TrainingData, views: RenderedViews) -> 
         return None
     (x, values), (true_x, true_values) = learned, true
     inside = (true_x >= x[0]) & (true_x <= x[-1])
-    channels = [int(c) for c in np.unique(data.channel)]
+    channels = list(_channels_in_use(data))
     rms, largest = [], []
     for channel in channels:
         reference = true_values[:, min(channel, true_values.shape[1] - 1)]

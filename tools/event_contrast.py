@@ -5,7 +5,7 @@
 For an emulated session, renders (noise-free) what each pixel sees at the start and at the end
 of a few exposures and compares the true change of ln intensity with the change the binned
 events imply (calibrated counts summed over the bins, times the contrast threshold: by default
-the emulated pixels' nominal one, kept in ``session.json``). Over the
+the one the camera configuration states). Over the
 pixels whose true change exceeds the threshold it prints the median ratio of the two, the
 least-squares slope of the event change on the true one, and their correlation. A ratio under
 1 means the events undercount contrast, and a fit at that threshold learns a field whose log
@@ -15,12 +15,13 @@ contrast is compressed by about as much (``log_contrast`` in a fit's ``metrics.j
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
 
-from davis_io.emulator import EmulatedCamera
+from davis_io.emulator import DVS_PRESETS, EmulatedCamera
+from davis_io.emulator.dvs import lin_log
+from davis_io.poses.estimate import stated_threshold
 from davis_io.session import Session
 
 
@@ -30,17 +31,19 @@ def log_changes(session_dir: Path, b: int, frames: int, threshold: float | None)
     Returns:
         The true changes, the implied ones, and the threshold used.
     """
-    settings = json.loads((session_dir / "session.json").read_text())["device_config"]["emulator"]
-    nominal = 0.5 * (settings.pop("dvs_threshold_on") + settings.pop("dvs_threshold_off"))
-    threshold = threshold or nominal
-    camera = EmulatedCamera(**settings)
     with Session.open(session_dir) as session:
         bins = session.bins(b)
+        settings = dict(session.manifest.device_config["emulator"])
+        threshold = threshold or stated_threshold(session)
+    for stated in ("dvs_threshold_on", "dvs_threshold_off"):
+        settings.pop(stated, None)
+    camera = EmulatedCamera(**settings)
+    linear_below = DVS_PRESETS[camera.config.dvs_preset].linlog_threshold
     true, implied = [], []
     for frame in np.linspace(0, len(bins.split_us) - 1, frames).round().astype(int):
         start_us, end_us = bins.split_us[frame, 0], bins.split_us[frame, -1]
         start, end = (
-            np.log(np.maximum(255.0 * camera.sensor_image(c2w), 1e-4))
+            lin_log(255.0 * camera.sensor_image(c2w), linear_below)
             for c2w in camera.trajectory.c2w(np.array([start_us, end_us]))
         )
         true.append((end - start).ravel())
