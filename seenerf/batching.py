@@ -1,4 +1,4 @@
-"""Random pixel batches of training frames (all b+1 poses per pixel) and of the oracle's truth."""
+"""Random pixel batches of training frames (every pose of an exposure) and of the oracle's truth."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import torch
 from seenerf.data import TrainingData
 from seenerf.model import RayBatch
 from seenerf.rays import camera_rays
+from seenerf.subframes import refine_exposure
 
 __all__ = ["FrameSampler", "OracleSampler"]
 
@@ -22,6 +23,7 @@ class FrameSampler:
         calibrated: batches carry the h()-calibrated counts (True) or the raw integer counts.
         exclude: flat indices ``position_in_frames * H * W + pixel`` never drawn (validation).
         device: torch device.
+        subframes: sub-frames per bin of the exposure integral (:mod:`seenerf.subframes`).
     """
 
     def __init__(
@@ -32,13 +34,16 @@ class FrameSampler:
         calibrated: bool = True,
         exclude: np.ndarray | None = None,
         device: str = "cpu",
+        subframes: int = 1,
     ):
         self.height, self.width = data.image_size
         self.frames = torch.as_tensor(frames, dtype=torch.long)
         self.ldr = torch.as_tensor(data.ldr, device=device)
         self.exposure_s = torch.as_tensor(data.exposure_s, device=device)
-        self.weights = torch.as_tensor(data.weights, device=device)
-        self.c2w = torch.as_tensor(data.c2w, device=device)
+        c2w, weights = refine_exposure(data.c2w, data.weights, subframes)
+        self.subframes = subframes
+        self.weights = torch.as_tensor(weights, device=device)
+        self.c2w = torch.as_tensor(c2w, device=device)
         self.intrinsics = torch.as_tensor(data.intrinsics, device=device)
         self.mix = torch.as_tensor(data.mix, device=device).reshape(-1, 3)
         self.channel = torch.as_tensor(data.channel, device=device).reshape(-1)
@@ -93,6 +98,7 @@ class FrameSampler:
             self.channel[pixel],
             self.ldr[frame, v, u],
             self.bins[frame, :, v, u],
+            self.subframes,
         )
 
 

@@ -43,6 +43,8 @@ class FitConfig:
         warm_steps: CRF warm-start steps (-1: the preset's, the reference's 500).
         register_test_views: before scoring a fit made from estimated poses, refine each
             held-out pose against its image (scores at the unrefined poses are kept too).
+        subframes: poses per event bin in the exposure integral (:mod:`seenerf.subframes`);
+            1 is the published b+1 latent poses.
     """
 
     preset: str = "fast"
@@ -66,6 +68,7 @@ class FitConfig:
     batch_pixels: int = 0
     warm_steps: int = -1
     register_test_views: bool = True
+    subframes: int = 1
 
     def validate(self) -> FitConfig:
         """Check names and ranges; return self.
@@ -86,6 +89,10 @@ class FitConfig:
             raise ConfigError(f"device {self.device!r} is unknown; choose auto, cpu or cuda")
         if self.steps < 0 or self.time_budget_s < 0 or self.bins < 0:
             raise ConfigError("steps, time budget and bins must be >= 0")
+        if self.subframes < 1:
+            raise ConfigError(
+                f"subframes must be >= 1 (1: the b+1 latent poses), got {self.subframes}"
+            )
         if not 0 <= self.event_share <= 1 or not 0 <= self.validation_share < 0.5:
             raise ConfigError("event_share must be in [0, 1] and validation_share in [0, 0.5)")
         if self.threshold <= 0 or self.cutoff_hz <= 0:
@@ -108,6 +115,7 @@ class FitConfig:
             "cutoff_hz",
             "event_share",
             "batch_pixels",
+            "subframes",
         )
         return {name: getattr(self, name) for name in keep}
 

@@ -26,6 +26,7 @@ from seenerf.scoring import (
     write_views,
 )
 from seenerf.session_data import load_training_data
+from seenerf.subframes import median_travel_px
 from seenerf.trainer import Trainer, TrainSummary
 from seenerf.views import IDENTITY
 
@@ -118,6 +119,11 @@ def fit_data(
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     trainer = Trainer(data, config, run_dir, log, spent_s)
+    travel_px = median_travel_px(data)
+    log(
+        f"image motion between latent poses: median {travel_px:.1f} px at the mean depth; "
+        f"{config.subframes} pose(s) per bin in the blur integral"
+    )
     save_config(
         config,
         run_dir / "config.json",
@@ -145,6 +151,7 @@ def fit_data(
         "skipped_steps": summary.skipped_steps,
         "history": summary.history,
         "seconds_before_training": spent_s,
+        "latent_travel_px": travel_px,
     }
     write_json(run_dir / "metrics.json", metrics)
     return FitResult(run_dir, summary, metrics)

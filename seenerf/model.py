@@ -25,14 +25,16 @@ RESPONSE_TABLE_SIZE = 16_384
 
 @dataclass
 class RayBatch:
-    """Pixels of training frames, each seen from its frame's b+1 latent poses.
+    """Pixels of training frames, each seen from its frame's b+1 latent poses (and sub-frames).
 
     Attributes:
-        origins: ``(R, P, 3)`` ray origins per pixel and pose; ``directions`` likewise.
+        origins: ``(R, P, 3)`` ray origins per pixel and pose, P = b m + 1 with m sub-frames
+            per bin; ``directions`` likewise.
         weights: ``(R, P)`` exposure-integral weights.
         exposure_s: ``(R,)`` exposure time of the pixel's frame.
         mix: ``(R, 3)`` colour weights of the pixel; ``channel`` ``(R,)`` its response channel.
         ldr: ``(R,)`` recorded value in [0, 1]; ``bins`` ``(R, b)`` event counts.
+        subframes: m; every m-th pose is a latent pose, where the event model looks.
     """
 
     origins: torch.Tensor
@@ -43,6 +45,7 @@ class RayBatch:
     channel: torch.Tensor
     ldr: torch.Tensor
     bins: torch.Tensor
+    subframes: int = 1
 
 
 @dataclass
@@ -156,7 +159,8 @@ class SeeNerfModel(nn.Module):
         ldr, log_radiance = IMAGING[self.variant.imaging](self.crf, batch, values, log_dt)
         counts = None
         if self.event_crf is not None:
-            counts = self.event_crf(log_radiance, batch.mix, batch.exposure_s)
+            latent = log_radiance[:, :: batch.subframes]
+            counts = self.event_crf(latent, batch.mix, batch.exposure_s)
         return Prediction(ldr, counts, log_radiance, num_samples)
 
     def render_log_radiance(self, origins: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:

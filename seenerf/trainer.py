@@ -124,6 +124,7 @@ class Trainer:
             events is None or events.calibrated,
             self.validation.numpy(),
             self.device,
+            self.config.subframes,
         )
         self.oracle = None
         if self.model.variant.supervision == "sharp-hdr":

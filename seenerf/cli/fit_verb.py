@@ -49,6 +49,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--bins", type=int, default=0, help="event bins per exposure b (default: the session's)"
     )
     parser.add_argument(
+        "--subframes",
+        type=int,
+        default=1,
+        help="poses per event bin in the blur integral, interpolated between the latent poses "
+        "(default 1: the b+1 latent poses, as published); for motion of many pixels per bin",
+    )
+    parser.add_argument(
         "--low-pass",
         default="reference",
         help="delay filter reading: reference "
@@ -87,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
         time_budget_s=args.time_budget,
         device=args.device,
         bins=args.bins,
+        subframes=args.subframes,
         low_pass=args.low_pass,
         threshold=args.threshold,
         seed=args.seed,
