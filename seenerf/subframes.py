@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from davis_io.bins import trapezoid_weights
 from davis_io.poses.align import interpolate_poses
 from seenerf.data import TrainingData
 
@@ -23,7 +24,7 @@ __all__ = [
 ]
 
 _TIME_UNITS = 1_000_000
-"""Exposure fractions are handed to the pose interpolation in millionths."""
+"""Exposure fractions are handed to the trapezoid weights in millionths."""
 
 
 def latent_fractions(weights: np.ndarray) -> np.ndarray:
@@ -54,15 +55,13 @@ def latent_fractions(weights: np.ndarray) -> np.ndarray:
     return np.concatenate([np.zeros((frames, 1)), np.cumsum(intervals, axis=1)], axis=1).clip(0, 1)
 
 
-def _trapezoid(fractions: np.ndarray) -> np.ndarray:
-    padded = np.concatenate([fractions[:1], fractions, fractions[-1:]])
-    return (padded[2:] - padded[:-2]) / 2.0
-
-
 def refine_exposure(
     c2w: np.ndarray, weights: np.ndarray, subdivisions: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Poses and trapezoid weights of each exposure with every bin split into sub-frames.
+
+    Sub-frame j of bin k lies at fraction j/m of the bin's time and of the way from latent pose
+    k to latent pose k+1, so a bin that lasted no time keeps its poses and gets no weight.
 
     Args:
         c2w: ``(F, b+1, 4, 4)`` latent poses.
@@ -83,14 +82,12 @@ def refine_exposure(
     for frame in range(frames):
         start, end = fractions[frame, :-1], fractions[frame, 1:]
         fine = np.concatenate([(start[:, None] + steps * (end - start)[:, None]).ravel(), [1.0]])
-        known = np.concatenate([[True], np.diff(fractions[frame]) > 0])
-        fine_c2w[frame] = interpolate_poses(
-            np.round(fractions[frame, known] * _TIME_UNITS).astype(np.int64),
-            c2w[frame, known],
-            np.round(fine * _TIME_UNITS).astype(np.int64),
-        )
+        fine_weights[frame] = trapezoid_weights(np.round(fine * _TIME_UNITS).astype(np.int64))
+        for k in range(points - 1):
+            fine_c2w[frame, k * subdivisions : (k + 1) * subdivisions] = interpolate_poses(
+                np.array([0, subdivisions]), c2w[frame, k : k + 2], np.arange(subdivisions)
+            )
         fine_c2w[frame, ::subdivisions] = c2w[frame]
-        fine_weights[frame] = _trapezoid(fine)
     return fine_c2w, fine_weights
 
 

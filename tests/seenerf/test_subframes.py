@@ -61,6 +61,15 @@ def test_two_subframes_halve_each_bin_and_keep_the_latent_poses():
     np.testing.assert_allclose(turned, [45.0], atol=1e-6)
 
 
+def test_an_empty_bin_keeps_its_latent_pose_and_gets_no_weight():
+    c2w = np.tile(np.eye(4), (1, 3, 1, 1))
+    c2w[0, :, 0, 3] = [0.0, 1.0, 2.0]
+    weights = trapezoid_weights(np.array([0, 0, 100]))[None]  # bin 0 lasts no time
+    fine_c2w, fine_weights = refine_exposure(c2w, weights, 2)
+    np.testing.assert_allclose(fine_weights[0], [0, 0, 0.25, 0.5, 0.25], atol=1e-9)
+    np.testing.assert_allclose(fine_c2w[0, :, 0, 3], [0.0, 0.5, 1.0, 1.5, 2.0], atol=1e-9)
+
+
 def test_one_subframe_returns_the_latent_poses():
     c2w, weights = np.tile(np.eye(4), (2, 3, 1, 1)), np.full((2, 3), 1 / 3)
     fine_c2w, fine_weights = refine_exposure(c2w, weights, 1)
