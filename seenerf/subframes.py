@@ -5,7 +5,8 @@ image moves several pixels between two latent poses, that sum is a few ghosts of
 not the smear the sensor integrated, and the field learns to blur itself to match. Splitting
 each bin into ``m`` sub-frames (poses interpolated between its two latent poses: rotation
 slerped, centre linear) samples the smear ``m`` times finer. The events keep their b bins: only
-every ``m``-th pose is a latent pose.
+every ``m``-th pose is a latent pose. At the benchmark's 7-10 px between latent poses it gains
+nothing (BENCHMARKS.md, "Per scene"), so a fit uses ``m = 1`` unless told otherwise.
 """
 
 from __future__ import annotations
