@@ -1,15 +1,19 @@
-"""How much of the true log-intensity change of an exposure an emulated session's events carry.
+"""How much of the true log-intensity change an emulated session's events carry, and how late.
 
     python tools/event_contrast.py SESSION [--bins 4] [--frames 3] [--threshold THETA]
+        [--latency-ms MS | --scan-latency]
 
-For an emulated session, renders (noise-free) what each pixel sees at the start and at the end
-of a few exposures and compares the true change of ln intensity with the change the binned
-events imply (calibrated counts summed over the bins, times the contrast threshold: by default
-the one the camera configuration states). Over the
-pixels whose true change exceeds the threshold it prints the median ratio of the two, the
-least-squares slope of the event change on the true one, and their correlation. A ratio under
-1 means the events undercount contrast, and a fit at that threshold learns a field whose log
-contrast is compressed by about as much (``log_contrast`` in a fit's ``metrics.json``).
+For an emulated session, renders (noise-free) what each pixel sees at the latent time points of
+a few exposures and compares the true change of ln intensity over each bin with the change the
+bin's events imply (calibrated counts times the contrast threshold: by default the one the
+camera configuration states). Over the pixels whose true change exceeds the threshold it prints
+the median ratio of the two, the least-squares slope of the event change on the true one, and
+their correlation. A ratio under 1 means the events undercount contrast.
+
+Events come late: a pixel's photoreceptor low-pass lags in the dark, and its refractory period
+lets a strong edge out at only one event per dead time, so the counts of a bin describe a change
+that happened earlier. ``--latency-ms`` compares each bin with the true change that much
+earlier; ``--scan-latency`` tries 0 to 16 ms and names the latency the events agree with best.
 """
 
 from __future__ import annotations
@@ -24,9 +28,16 @@ from davis_io.emulator.dvs import lin_log
 from davis_io.poses.estimate import stated_threshold
 from davis_io.session import Session
 
+SCANNED_LATENCIES_MS = tuple(range(0, 17, 2))
 
-def log_changes(session_dir: Path, b: int, frames: int, threshold: float | None):
-    """True and event-implied ln-intensity changes over ``frames`` exposures, pixels flattened.
+
+def log_changes(
+    session_dir: Path, b: int, frames: int, threshold: float | None, latency_us: int = 0
+):
+    """True and event-implied ln-intensity changes per bin of ``frames`` exposures, flattened.
+
+    Args:
+        latency_us: the true change is taken over each bin's time span moved this much earlier.
 
     Returns:
         The true changes, the implied ones, and the threshold used.
@@ -41,14 +52,28 @@ def log_changes(session_dir: Path, b: int, frames: int, threshold: float | None)
     linear_below = DVS_PRESETS[camera.config.dvs_preset].linlog_threshold
     true, implied = [], []
     for frame in np.linspace(0, len(bins.split_us) - 1, frames).round().astype(int):
-        start_us, end_us = bins.split_us[frame, 0], bins.split_us[frame, -1]
-        start, end = (
-            lin_log(255.0 * camera.sensor_image(c2w), linear_below)
-            for c2w in camera.trajectory.c2w(np.array([start_us, end_us]))
+        times = bins.split_us[frame] - latency_us
+        seen = np.stack(
+            [
+                lin_log(255.0 * camera.sensor_image(c2w), linear_below)
+                for c2w in camera.trajectory.c2w(times)
+            ]
         )
-        true.append((end - start).ravel())
-        implied.append(threshold * bins.calibrated[frame].sum(axis=0).ravel())
+        true.append(np.diff(seen, axis=0).ravel())
+        implied.append(threshold * bins.calibrated[frame].ravel())
     return np.concatenate(true), np.concatenate(implied), threshold
+
+
+def agreement(true: np.ndarray, implied: np.ndarray, threshold: float) -> dict:
+    """Median ratio, slope and correlation where the true change exceeds ``threshold``."""
+    moved = np.abs(true) > threshold
+    true, implied = true[moved], implied[moved]
+    return {
+        "pixels": int(moved.sum()),
+        "ratio": float(np.median(implied / true)),
+        "slope": float((true @ implied) / (true @ true)),
+        "correlation": float(np.corrcoef(true, implied)[0, 1]),
+    }
 
 
 def main() -> None:
@@ -57,14 +82,26 @@ def main() -> None:
     parser.add_argument("--bins", type=int, default=4)
     parser.add_argument("--frames", type=int, default=3, help="exposures to compare")
     parser.add_argument("--threshold", type=float, default=None, help="default: the nominal one")
+    latency = parser.add_mutually_exclusive_group()
+    latency.add_argument("--latency-ms", type=float, default=0.0, help="event latency assumed")
+    latency.add_argument("--scan-latency", action="store_true", help="try 0 to 16 ms")
     args = parser.parse_args()
-    true, implied, threshold = log_changes(args.session, args.bins, args.frames, args.threshold)
-    moved = np.abs(true) > threshold
-    true, implied = true[moved], implied[moved]
-    print(f"{moved.sum()} pixels whose ln intensity changed by more than {threshold:g}")
-    print(f"median ratio of event to true change: {np.median(implied / true):.3f}")
-    print(f"slope of event on true change: {(true @ implied) / (true @ true):.3f}")
-    print(f"correlation: {np.corrcoef(true, implied)[0, 1]:.3f}")
+    latencies = SCANNED_LATENCIES_MS if args.scan_latency else (args.latency_ms,)
+    results = []
+    for latency_ms in latencies:
+        true, implied, threshold = log_changes(
+            args.session, args.bins, args.frames, args.threshold, round(latency_ms * 1000)
+        )
+        found = agreement(true, implied, threshold)
+        results.append((found["correlation"], latency_ms))
+        print(
+            f"latency {latency_ms:g} ms: {found['pixels']} pixels whose ln intensity changed by "
+            f"more than {threshold:g} in a bin; event / true change: median ratio "
+            f"{found['ratio']:.3f}, slope {found['slope']:.3f}, correlation "
+            f"{found['correlation']:.3f}"
+        )
+    if args.scan_latency:
+        print(f"the events agree best with the true changes {max(results)[1]:g} ms earlier")
 
 
 if __name__ == "__main__":

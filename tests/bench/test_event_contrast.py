@@ -1,5 +1,5 @@
 import numpy as np
-from event_contrast import log_changes
+from event_contrast import agreement, log_changes
 
 from davis_io.emulator import EmulatedCamera
 from davis_io.session.recorder import record
@@ -22,4 +22,26 @@ def test_events_of_bandwidth_limited_pixels_undercount_the_log_change(tmp_path):
     session = record(EmulatedCamera("room", seed=1, dvs_preset="noisy", **SMALL), tmp_path / "s")
     true, implied, threshold = log_changes(session.folder, b=4, frames=2, threshold=None)
     moved = np.abs(true) > 2 * threshold
-    assert np.median(implied[moved] / true[moved]) < 0.9  # 0.76 when written
+    assert np.median(implied[moved] / true[moved]) < 0.9
+
+
+def test_ideal_events_agree_best_at_no_latency_and_late_events_a_few_ms_later(tmp_path):
+    def correlation(preset, latency_us):
+        folder = tmp_path / preset
+        if not folder.exists():
+            record(EmulatedCamera("room", seed=1, dvs_preset=preset, **SMALL), folder)
+        true, implied, threshold = log_changes(folder, 4, 2, None, latency_us)
+        return agreement(true, implied, threshold)["correlation"]
+
+    # Ideal pixels fire within the 2 ms DVS step of the change: any latency assumed hurts.
+    assert correlation("clean", 0) > correlation("clean", 4_000)
+    # The noisy preset's pixels (500 µs refractory, one-step delay, low-pass) fire late.
+    assert correlation("noisy", 4_000) > correlation("noisy", 0)
+
+
+def test_agreement_of_a_known_pair():
+    true = np.array([1.0, -1.0, 2.0, 0.1])
+    found = agreement(true, 0.5 * true, 0.3)
+    assert found["pixels"] == 3  # 0.1 is under the threshold
+    assert np.isclose(found["ratio"], 0.5) and np.isclose(found["slope"], 0.5)
+    assert np.isclose(found["correlation"], 1.0)
