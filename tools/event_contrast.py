@@ -32,15 +32,23 @@ SCANNED_LATENCIES_MS = tuple(range(0, 17, 2))
 
 
 def log_changes(
-    session_dir: Path, b: int, frames: int, threshold: float | None, latency_us: int = 0
+    session_dir: Path,
+    b: int,
+    frames: int,
+    threshold: float | None,
+    latencies_us: tuple[int, ...] = (0,),
 ):
     """True and event-implied ln-intensity changes per bin of ``frames`` exposures, flattened.
 
+    The session is read and the emulator built once, whatever the number of latencies.
+
     Args:
-        latency_us: the true change is taken over each bin's time span moved this much earlier.
+        latencies_us: for each, the true change is taken over each bin's time span moved this
+            much earlier.
 
     Returns:
-        The true changes, the implied ones, and the threshold used.
+        The true changes ``(len(latencies_us), N)``, the implied ones ``(N,)``, and the
+        threshold used.
     """
     with Session.open(session_dir) as session:
         bins = session.bins(b)
@@ -50,18 +58,21 @@ def log_changes(
         settings.pop(stated, None)
     camera = EmulatedCamera(**settings)
     linear_below = DVS_PRESETS[camera.config.dvs_preset].linlog_threshold
-    true, implied = [], []
-    for frame in np.linspace(0, len(bins.split_us) - 1, frames).round().astype(int):
-        times = bins.split_us[frame] - latency_us
-        seen = np.stack(
-            [
-                lin_log(255.0 * camera.sensor_image(c2w), linear_below)
-                for c2w in camera.trajectory.c2w(times)
-            ]
-        )
-        true.append(np.diff(seen, axis=0).ravel())
-        implied.append(threshold * bins.calibrated[frame].ravel())
-    return np.concatenate(true), np.concatenate(implied), threshold
+    chosen = np.linspace(0, len(bins.split_us) - 1, frames).round().astype(int)
+    true = []
+    for latency_us in latencies_us:
+        changes = []
+        for frame in chosen:
+            seen = np.stack(
+                [
+                    lin_log(255.0 * camera.sensor_image(c2w), linear_below)
+                    for c2w in camera.trajectory.c2w(bins.split_us[frame] - latency_us)
+                ]
+            )
+            changes.append(np.diff(seen, axis=0).ravel())
+        true.append(np.concatenate(changes))
+    implied = np.concatenate([threshold * bins.calibrated[frame].ravel() for frame in chosen])
+    return np.stack(true), implied, threshold
 
 
 def agreement(true: np.ndarray, implied: np.ndarray, threshold: float) -> dict:
@@ -87,12 +98,16 @@ def main() -> None:
     latency.add_argument("--scan-latency", action="store_true", help="try 0 to 16 ms")
     args = parser.parse_args()
     latencies = SCANNED_LATENCIES_MS if args.scan_latency else (args.latency_ms,)
+    true, implied, threshold = log_changes(
+        args.session,
+        args.bins,
+        args.frames,
+        args.threshold,
+        tuple(round(latency_ms * 1000) for latency_ms in latencies),
+    )
     results = []
-    for latency_ms in latencies:
-        true, implied, threshold = log_changes(
-            args.session, args.bins, args.frames, args.threshold, round(latency_ms * 1000)
-        )
-        found = agreement(true, implied, threshold)
+    for latency_ms, true_changes in zip(latencies, true, strict=True):
+        found = agreement(true_changes, implied, threshold)
         results.append((found["correlation"], latency_ms))
         print(
             f"latency {latency_ms:g} ms: {found['pixels']} pixels whose ln intensity changed by "
