@@ -11,7 +11,13 @@ import torch
 
 from davis_io.poses.align import Similarity, rotation_error_deg
 from seenerf.data import TrainingData
-from seenerf.evaluate import align_channel_scale, hdr_metrics, ldr_metrics, log_contrast
+from seenerf.evaluate import (
+    align_channel_scale,
+    hdr_metrics,
+    ldr_metrics,
+    log_contrast,
+    residual_blur,
+)
 from seenerf.export import (
     crf_plot,
     tone_mapped_preview,
@@ -95,7 +101,8 @@ def score_views(views: RenderedViews, data: TrainingData) -> dict:
     """PSNR / SSIM of HDR (tone-mapped, per-channel scale aligned and raw) and of each LDR exposure.
 
     The novel-exposure score is the mean over the bracket's second and fourth exposures (the
-    paper's protocol). LPIPS is added per exposure only when its weights are on this machine;
+    paper's protocol). ``residual_blur`` measures how sharp the views at the bracket's middle
+    exposure are. LPIPS is added per exposure only when its weights are on this machine;
     ``lpips`` says which.
     """
     test = data.test
@@ -114,6 +121,8 @@ def score_views(views: RenderedViews, data: TrainingData) -> dict:
             scores["ldr"][f"{exposure:g}"]["lpips"] = float(
                 np.mean([lpips(p, t) for p, t in zip(views.ldr[index], truth_ldr, strict=True)])
             )
+    middle = len(views.exposures_s) // 2
+    scores["residual_blur"] = residual_blur(views.ldr[middle], list(test.ldr[:, middle]))
     novel = [
         scores["ldr"][f"{views.exposures_s[i]:g}"] for i in (1, 3) if i < len(views.exposures_s)
     ]

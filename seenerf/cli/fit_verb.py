@@ -131,6 +131,13 @@ def format_scores(metrics: dict) -> str:
             )
         if "lpips" in metrics:
             lines.append(metrics["lpips"])
+        if "residual_blur" in metrics:
+            blur = metrics["residual_blur"]
+            lines.append(
+                f"sharpness: the middle exposure's views match the truth blurred by "
+                f"{blur['sigma_px']:.3g} px (Gaussian sigma; {blur['psnr_gain']:+.2f} dB against "
+                "the unblurred truth)"
+            )
         poses = metrics.get("test_poses", {})
         if poses.get("registered"):
             mapped = poses["at_mapped_poses"]

@@ -8,6 +8,7 @@ from seenerf.evaluate import (
     hdr_metrics,
     log_contrast,
     psnr,
+    residual_blur,
     ssim,
     tone_map_pair,
 )
@@ -100,6 +101,20 @@ def test_log_contrast_recovers_a_power_law_per_channel():
         [3.0 * truth[..., 0] ** 0.8, truth[..., 1], 0.5 * truth[..., 2] ** 1.25], -1
     )
     np.testing.assert_allclose(log_contrast(predicted, truth), [0.8, 1.0, 1.25], rtol=1e-9)
+
+
+def test_residual_blur_finds_the_blur_of_a_render():
+    import cv2
+
+    rng = np.random.default_rng(0)
+    truth = [rng.uniform(0.0, 1.0, size=(40, 50, 3)).astype(np.float32) for _ in range(2)]
+    blurred = [cv2.GaussianBlur(t, (0, 0), 0.75) for t in truth]
+    found = residual_blur(blurred, truth)
+    assert found["sigma_px"] == 0.75 and found["psnr_gain"] > 10.0
+    assert residual_blur(truth, truth) == {"sigma_px": 0.0, "psnr_gain": 0.0}
+    # A monochrome view (H, W, 1) keeps its shape through the blur.
+    grey = [t[..., :1] for t in truth]
+    assert residual_blur([b[..., :1] for b in blurred], grey)["sigma_px"] == 0.75
 
 
 def test_crf_plot_draws_only_the_curves_in_use(tmp_path):

@@ -48,7 +48,8 @@ def test_fit_writes_every_output(tiny_scene, tmp_path):
     assert set(metrics["ldr"]) == set(exposures)
     transforms = json.loads((run / "transforms.json").read_text())
     assert len(transforms["frames"]) == len(tiny_scene.test.c2w)
-    assert "novel exposures" in format_scores(metrics)
+    assert 0.0 <= metrics["residual_blur"]["sigma_px"] <= 2.0
+    assert "novel exposures" in format_scores(metrics) and "sharpness" in format_scores(metrics)
 
 
 def test_fit_verb_passes_the_contrast_threshold_to_the_fit(monkeypatch, tmp_path):
