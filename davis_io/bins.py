@@ -35,7 +35,14 @@ import numpy as np
 from davis_io.errors import DavisIOError
 from davis_io.types import EVENT_DTYPE
 
-__all__ = ["BinningError", "ExposureBins", "bin_exposure", "split_times_us", "trapezoid_weights"]
+__all__ = [
+    "BinningError",
+    "ExposureBins",
+    "bin_exposure",
+    "split_times_us",
+    "subdivide",
+    "trapezoid_weights",
+]
 
 _RAW_DTYPE = np.int16
 _RAW_LIMITS = np.iinfo(_RAW_DTYPE)
@@ -92,6 +99,22 @@ def split_times_us(window_t_us: np.ndarray, start_us: int, end_us: int, b: int) 
         found = window_t_us[np.minimum(first_index, count - 1)]
         inner_us = np.where(first_index < count, found, end_us)
     return np.concatenate(([start_us], inner_us, [end_us])).astype(np.int64)
+
+
+def subdivide(points: np.ndarray, parts: int) -> np.ndarray:
+    """Non-decreasing ``points`` with ``parts - 1`` evenly spaced ones added between neighbours.
+
+    Args:
+        points: ``(P,)`` time points (any units).
+        parts: pieces each interval is cut into (1 returns the points).
+
+    Returns:
+        ``((P - 1) * parts + 1,)`` float64 points; point ``k * parts`` is ``points[k]``.
+    """
+    points = np.asarray(points, np.float64)
+    steps = np.arange(parts) / parts
+    inner = points[:-1, None] + steps * np.diff(points)[:, None]
+    return np.concatenate([inner.ravel(), points[-1:]])
 
 
 def trapezoid_weights(split_us: np.ndarray) -> np.ndarray:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from davis_io.bins import trapezoid_weights
+from davis_io.bins import subdivide, trapezoid_weights
 from davis_io.poses.align import interpolate_poses
 from seenerf.data import TrainingData
 
@@ -77,12 +77,10 @@ def refine_exposure(
         return c2w, weights
     fractions = latent_fractions(weights)
     frames, points = fractions.shape
-    steps = np.arange(subdivisions) / subdivisions
     fine_c2w = np.empty((frames, (points - 1) * subdivisions + 1, 4, 4), c2w.dtype)
     fine_weights = np.empty(fine_c2w.shape[:2], weights.dtype)
     for frame in range(frames):
-        start, end = fractions[frame, :-1], fractions[frame, 1:]
-        fine = np.concatenate([(start[:, None] + steps * (end - start)[:, None]).ravel(), [1.0]])
+        fine = subdivide(fractions[frame], subdivisions)
         fine_weights[frame] = trapezoid_weights(np.round(fine * _TIME_UNITS).astype(np.int64))
         for k in range(points - 1):
             fine_c2w[frame, k * subdivisions : (k + 1) * subdivisions] = interpolate_poses(

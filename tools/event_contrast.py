@@ -52,11 +52,8 @@ def log_changes(
     """
     with Session.open(session_dir) as session:
         bins = session.bins(b)
-        settings = dict(session.manifest.device_config["emulator"])
+        camera = EmulatedCamera.of_session(session.manifest.device_config)
         threshold = threshold or stated_threshold(session)
-    for stated in ("dvs_threshold_on", "dvs_threshold_off"):
-        settings.pop(stated, None)
-    camera = EmulatedCamera(**settings)
     linear_below = DVS_PRESETS[camera.config.dvs_preset].linlog_threshold
     chosen = np.linspace(0, len(bins.split_us) - 1, frames).round().astype(int)
     true = []

@@ -93,19 +93,24 @@ def expose(
     exposure_s: float,
     settings: ApsSettings,
     rng: np.random.Generator | None,
+    weights: np.ndarray | None = None,
 ) -> np.ndarray:
     """One APS frame from single-channel sub-frame radiance ``(S, H, W)``.
 
     Args:
-        subframes: radiance seen by each pixel at S evenly spaced times of the exposure.
+        subframes: radiance seen by each pixel at S times of the exposure.
         exposure_s: exposure duration in seconds.
         settings: response, gain, bit depth and noise.
         rng: noise generator, or None for a noise-free frame.
+        weights: ``(S,)`` integral weights summing to 1, or None for S evenly spaced times
+            (:func:`trapezoid_weights`).
 
     Returns:
         ``(H, W)`` uint16 ADC values.
     """
-    blurred = integrate_exposure(subframes, trapezoid_weights(len(subframes)))
+    if weights is None:
+        weights = trapezoid_weights(len(subframes))
+    blurred = integrate_exposure(subframes, weights)
     x = settings.gain_per_s * exposure_s * blurred
     if rng is not None and settings.electrons_per_unit > 0:
         x = sensor_noise(x, settings.electrons_per_unit, settings.read_noise_e, rng)

@@ -206,6 +206,23 @@ class EmulatedCamera(Closing):
         """A camera with exactly these settings."""
         return cls(**asdict(config))
 
+    @classmethod
+    def of_session(cls, device_config: dict) -> EmulatedCamera:
+        """The camera an emulated session was recorded with, from its manifest's device config.
+
+        Raises:
+            UsageError: the session was not recorded by the emulator.
+        """
+        if "emulator" not in device_config:
+            raise UsageError(
+                "this session was not recorded by the emulator (its device configuration has no "
+                "'emulator' settings); record one with seecap record --emulate"
+            )
+        settings = dict(device_config["emulator"])
+        for stated in ("dvs_threshold_on", "dvs_threshold_off"):  # the preset's, written back
+            settings.pop(stated, None)
+        return cls(**settings)
+
     @cached_property
     def truth(self) -> Truth:
         """Ground truth of this recording (rendered on first use)."""
@@ -230,12 +247,32 @@ class EmulatedCamera(Closing):
         radiance, _ = self.scene.render(self._camera, c2w)
         return through_filter(radiance, self._weights)
 
+    def expose_at(
+        self,
+        times_us: np.ndarray,
+        weights: np.ndarray | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> np.ndarray:
+        """``(H, W)`` ADC values of an exposure summed from what the pixels see at ``times_us``.
+
+        Args:
+            times_us: sample times of the exposure, µs.
+            weights: their integral weights summing to 1, or None for evenly spaced times.
+            rng: noise generator, or None for a noise-free frame.
+        """
+        subframes = np.stack([self.sensor_image(c2w) for c2w in self.trajectory.c2w(times_us)])
+        settings = ApsSettings(self.config.response, self.config.gain_per_s)
+        return expose(subframes, self.config.exposure_us * 1e-6, settings, rng, weights)
+
     def _frame(self, window: np.ndarray, rng: np.random.Generator | None) -> Frame:
         times = subframe_times(int(window[1]), int(window[2]), self.config.subframes)
-        subframes = np.stack([self.sensor_image(c2w) for c2w in self.trajectory.c2w(times)])
-        settings = ApsSettings(self.config.response, self.config.gain_per_s)
-        image = expose(subframes, self.config.exposure_us * 1e-6, settings, rng)
+        image = self.expose_at(times, rng=rng)
         return Frame(image, int(window[1]), int(window[2]), int(window[0]), int(window[3]), 10)
+
+    def noise_free_frame(self, frame: Frame) -> np.ndarray:
+        """``(H, W)`` ADC values the emulator records for ``frame``'s exposure, without noise."""
+        start, end = frame.exposure_start_us, frame.exposure_end_us
+        return self.expose_at(subframe_times(start, end, self.config.subframes))
 
     def _triggers(self, windows: np.ndarray) -> np.ndarray:
         kinds = [

@@ -214,3 +214,21 @@ def test_truth_gives_the_true_pose_at_any_time(small):
     # Not trivially close: the pose moves by far more than that within a millisecond.
     moved = camera.trajectory.c2w(between + 500)
     assert np.abs(moved - camera.trajectory.c2w(between)).max() > 1e-4
+
+
+def test_a_session_names_the_camera_it_was_recorded_with(tmp_path):
+    from davis_io.session import Session
+    from davis_io.session.recorder import record as record_session
+
+    original = EmulatedCamera("lamp", seed=3, color_filter=ColorFilter.MONO, **SMALL)
+    recorded = record_session(original, tmp_path / "s")
+    with Session.open(recorded.folder) as session:
+        again = EmulatedCamera.of_session(session.manifest.device_config)
+        frame = session.frame(0)
+    assert again.config == original.config
+    # The recorded frame is the noise-free one plus sensor noise: close, not equal.
+    clean = again.noise_free_frame(frame).astype(float)
+    difference = np.abs(frame.image - clean)
+    assert 0 < difference.mean() < 0.05 * clean.mean()
+    with pytest.raises(UsageError, match="not recorded by the emulator"):
+        EmulatedCamera.of_session({"usb": {}})

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from davis_io.bins import BinningError, bin_exposure, split_times_us, trapezoid_weights
+from davis_io.bins import BinningError, bin_exposure, split_times_us, subdivide, trapezoid_weights
 from davis_io.types import EVENT_DTYPE
 
 
@@ -185,3 +185,10 @@ def test_unsorted_events_are_rejected():
     events = events_of([(20, 0, 0, 1), (10, 0, 0, 1)])
     with pytest.raises(BinningError, match="not sorted"):
         bin_exposure(events, 0, 100, 2, width=1, height=1)
+
+
+def test_subdivide_adds_evenly_spaced_points_inside_each_interval():
+    np.testing.assert_array_equal(subdivide(np.array([0, 10, 30]), 2), [0, 5, 10, 20, 30])
+    np.testing.assert_array_equal(subdivide(np.array([0.0, 0.4, 1.0]), 1), [0.0, 0.4, 1.0])
+    # A zero-length interval keeps its points together.
+    np.testing.assert_array_equal(subdivide(np.array([0, 0, 3]), 3), [0, 0, 0, 0, 1, 2, 3])
