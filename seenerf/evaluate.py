@@ -10,6 +10,7 @@ import torch
 import torch.nn.functional as F  # noqa: N812
 
 __all__ = [
+    "BLUR_SIGMAS_PX",
     "align_channel_scale",
     "hdr_metrics",
     "ldr_metrics",
