@@ -11,6 +11,8 @@ from davis_io.emulator import EmulatedCamera, load_truth, save_truth
 from davis_io.emulator.aps import ApsSettings, expose
 from davis_io.emulator.response import apply_response
 from davis_io.errors import SessionError, UsageError
+from davis_io.session import Session
+from davis_io.session.recorder import record as record_session
 from davis_io.types import ColorFilter, PacketSource, TriggerKind
 
 SMALL = dict(width=64, height=48, focal_px=52.0, frames=2, test_views=2, exposure_us=20_000)
@@ -217,9 +219,6 @@ def test_truth_gives_the_true_pose_at_any_time(small):
 
 
 def test_a_session_names_the_camera_it_was_recorded_with(tmp_path):
-    from davis_io.session import Session
-    from davis_io.session.recorder import record as record_session
-
     original = EmulatedCamera("lamp", seed=3, color_filter=ColorFilter.MONO, **SMALL)
     recorded = record_session(original, tmp_path / "s")
     with Session.open(recorded.folder) as session:
