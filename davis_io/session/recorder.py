@@ -6,9 +6,11 @@ import errno
 import os
 import queue
 import shutil
+import signal
 import threading
 import time
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -124,9 +126,29 @@ def record(
         run = _Run(source, folder, manifest, queue_packets)
         if drop_when_full is None:
             drop_when_full = source.info.origin == "usb"
-        run.start(drop_when_full=drop_when_full, frames=frames, duration_us=duration_us)
-        run.supervise(status_callback, preview_path)
+        with _ctrl_c_stops(run):
+            run.start(drop_when_full=drop_when_full, frames=frames, duration_us=duration_us)
+            run.supervise(status_callback, preview_path)
     return run.finish()
+
+
+@contextmanager
+def _ctrl_c_stops(run: _Run):
+    """While the threads run, Ctrl-C (SIGINT) asks them to stop instead of raising.
+
+    A KeyboardInterrupt can land between any two statements, also outside a ``try``; escaping
+    while the writer thread still writes would close the HDF5 file under it. In the main thread
+    the handler only sets flags, so the writer always finishes before the file is closed.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, lambda _signum, _frame: run.interrupt())
+    try:
+        yield
+    finally:
+        if previous is not None:  # None: a handler installed outside Python, left as it was
+            signal.signal(signal.SIGINT, previous)
 
 
 class _Run:
@@ -191,13 +213,15 @@ class _Run:
                     last_status = self._report(status_callback, started, last_status)
                 if preview is not None and self.progress.preview is not last_preview:
                     last_preview = self._refresh_preview(preview)
-            except KeyboardInterrupt:
-                self.interrupted = True
-                self.stop.set()
             except Exception as error:  # the display failed: stop, keep what was recorded
                 self.failure = error
                 self.stop.set()
         reader.join(timeout=_READER_JOIN_S)
+
+    def interrupt(self) -> None:
+        """Ctrl-C: stop both threads; the session is kept and marked interrupted."""
+        self.interrupted = True
+        self.stop.set()
 
     def _report(self, callback, started: float, last: tuple[float, int]) -> tuple[float, int]:
         now, events = time.monotonic(), self.progress.events

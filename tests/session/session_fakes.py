@@ -1,5 +1,8 @@
 """Hand-built packet sources and synthetic streams for the session tests."""
 
+import itertools
+import time
+
 import numpy as np
 
 from davis_io.types import EVENT_DTYPE, Frame, Packet, SourceInfo
@@ -65,3 +68,18 @@ def synthetic_packets(frames, *, seed=0, events_per_period=400):
     end = frames * FRAME_PERIOD_US
     packets.append(Packet(events=random_events(rng, end, end + 1_000, 10)))
     return packets
+
+
+def endless_packets(with_frames):
+    """An endless stream of 10 ms event packets, each followed by its frame if ``with_frames``.
+
+    Frame ``k`` has pixel value ``k % 1000``; without frames the stream is paced by a short sleep.
+    """
+    rng = np.random.default_rng(0)
+    for index in itertools.count():
+        t0 = index * FRAME_PERIOD_US
+        yield Packet(events=random_events(rng, t0, t0 + FRAME_PERIOD_US, 2_000))
+        if with_frames:
+            yield Packet(frames=[frame_at(index, value=index % 1000)])
+        else:
+            time.sleep(0.002)

@@ -1,11 +1,19 @@
 """The recorder: limits, loss flags, queue overflow, source and disk failures, folder safety."""
 
 import errno
+import os
+import signal
 import time
 
 import numpy as np
 import pytest
-from session_fakes import ListSource, frame_at, random_events, synthetic_packets
+from session_fakes import (
+    ListSource,
+    endless_packets,
+    frame_at,
+    random_events,
+    synthetic_packets,
+)
 
 from davis_io.errors import DeviceError, UsageError
 from davis_io.session import Session
@@ -215,3 +223,22 @@ def test_time_going_back_stops_with_a_clear_error(tmp_path):
         assert session.manifest.status == "interrupted"
         times = session.events_between(-(2**62), 2**62)["t"]
         assert np.all(np.diff(times) >= 0)
+
+
+def test_ctrl_c_is_a_stop_request_while_the_threads_run(tmp_path):
+    # A KeyboardInterrupt raised while the writer thread still writes would close the file
+    # under it, so SIGINT only sets the stop flags for as long as the threads run.
+    handlers = []
+
+    def press_ctrl_c(status):
+        handlers.append(signal.getsignal(signal.SIGINT))
+        os.kill(os.getpid(), signal.SIGINT)
+
+    source = ListSource(endless_packets(with_frames=True))
+    result = record(source, tmp_path / "s", status_callback=press_ctrl_c)
+    assert result.status == "interrupted"
+    assert result.manifest.stop_reason == "interrupted (Ctrl-C)"
+    assert handlers and signal.default_int_handler not in handlers
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+    with Session.open(tmp_path / "s") as session:
+        assert not session.needs_repair and session.frame_count == result.manifest.frame_count
