@@ -147,8 +147,8 @@ def _ctrl_c_stops(run: _Run):
     try:
         yield
     finally:
-        if previous is not None:  # None: a handler installed outside Python, left as it was
-            signal.signal(signal.SIGINT, previous)
+        # None: the handler was not installed from Python; Python's own takes its place.
+        signal.signal(signal.SIGINT, signal.default_int_handler if previous is None else previous)
 
 
 class _Run:
