@@ -161,7 +161,7 @@ class Trainer:
 
     def _step(self) -> int:
         step = self.summary.steps
-        self._set_learning_rate(step)
+        self._set_learning_rate()
         if (
             self.model.renderer.grid is not None
             and step >= GRID_WARMUP_STEPS
@@ -209,8 +209,27 @@ class Trainer:
         }
         return loss, terms, rays, predictions[-1].num_samples
 
-    def _set_learning_rate(self, step: int) -> None:
-        factor = 0.1 ** (step / self.preset.lr_decay_steps)
+    def progress(self) -> float:
+        """How far the run is, 0 to 1: the larger of its share of the steps and of the budget.
+
+        The time share is the training seconds over what the budget leaves after the caller's
+        (poses); a run without a budget counts steps only.
+        """
+        progress = self.summary.steps / max(self.total_steps, 1)
+        training_budget = self.config.time_budget_s - self.spent_s
+        if self.config.time_budget_s > 0 and training_budget > 0:
+            progress = max(progress, self.summary.elapsed_s / training_budget)
+        return min(progress, 1.0)
+
+    def _set_learning_rate(self) -> None:
+        """The rate falls 10x every ``lr_decay_steps`` of a run that reaches its step count.
+
+        A run that its time budget stops first falls as far by its last step, so the field
+        ends annealed however fast the machine is (at half the steps, a step-based decay left
+        it at twice the final rate).
+        """
+        decades = self.progress() * self.total_steps / self.preset.lr_decay_steps
+        factor = 0.1**decades
         for group, base in zip(
             self.optimizer.param_groups, (self.preset.lr, self.preset.sensor_lr), strict=True
         ):

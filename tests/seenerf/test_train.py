@@ -125,6 +125,34 @@ def test_time_budget_stops_training(tiny_scene):
     assert summary.stopped == "budget" and summary.steps < 10_000
 
 
+def _field_lr_at(trainer, steps, elapsed_s):
+    trainer.summary.steps, trainer.summary.elapsed_s = steps, elapsed_s
+    trainer._set_learning_rate()
+    return trainer.optimizer.param_groups[0]["lr"]
+
+
+def test_learning_rate_falls_with_the_steps_of_a_run_without_budget(tiny_scene):
+    trainer = Trainer(tiny_scene, _config(steps=6000), log=lambda line: None)
+    decay, base = trainer.preset.lr_decay_steps, trainer.preset.lr
+    assert _field_lr_at(trainer, 0, 0.0) == pytest.approx(base)
+    assert _field_lr_at(trainer, 3000, 1e6) == pytest.approx(base * 0.1 ** (3000 / decay))
+
+
+def test_a_run_its_budget_stops_first_ends_as_annealed_as_a_full_one(tiny_scene):
+    # 100 s budget, 60 s already spent on poses: 40 s of training is the whole run.
+    trainer = Trainer(
+        tiny_scene, _config(steps=6000, time_budget_s=100.0), log=lambda line: None, spent_s=60.0
+    )
+    decay, base = trainer.preset.lr_decay_steps, trainer.preset.lr
+    assert trainer.progress() == 0.0
+    assert _field_lr_at(trainer, 600, 20.0) == pytest.approx(base * 0.1 ** (3000 / decay))
+    assert trainer.progress() == pytest.approx(0.5)
+    assert _field_lr_at(trainer, 1200, 40.0) == pytest.approx(base * 0.1 ** (6000 / decay))
+    assert _field_lr_at(trainer, 1300, 45.0) == pytest.approx(base * 0.1 ** (6000 / decay))
+    # Steps ahead of the clock still rule.
+    assert _field_lr_at(trainer, 4500, 10.0) == pytest.approx(base * 0.1 ** (4500 / decay))
+
+
 def test_progress_line_reports_losses_psnr_rate_and_eta(tiny_scene):
     lines = []
     trainer = Trainer(tiny_scene, _config(steps=4), log=lines.append)
