@@ -154,10 +154,14 @@ class Trainer:
         self._checkpoint()
         return self.summary
 
-    def _budget_left(self) -> float:
+    def _training_budget(self) -> float:
+        """Training seconds the budget leaves after the caller's (poses); inf without one."""
         if self.config.time_budget_s <= 0:
             return math.inf
-        return self.config.time_budget_s - self.spent_s - self.summary.elapsed_s
+        return self.config.time_budget_s - self.spent_s
+
+    def _budget_left(self) -> float:
+        return self._training_budget() - self.summary.elapsed_s
 
     def _step(self) -> int:
         step = self.summary.steps
@@ -216,8 +220,8 @@ class Trainer:
         (poses); a run without a budget counts steps only.
         """
         progress = self.summary.steps / max(self.total_steps, 1)
-        training_budget = self.config.time_budget_s - self.spent_s
-        if self.config.time_budget_s > 0 and training_budget > 0:
+        training_budget = self._training_budget()
+        if 0 < training_budget < math.inf:
             progress = max(progress, self.summary.elapsed_s / training_budget)
         return min(progress, 1.0)
 
