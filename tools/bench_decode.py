@@ -27,7 +27,7 @@ from davis_io.aedat import Aedat4Reader, Aedat4Writer
 from davis_io.aedat.liblz4 import system_liblz4
 from davis_io.types import Packet
 
-FIXTURES = Path(__file__).resolve().parents[1].parent / "shared" / "fixtures"
+FIXTURES = Path(__file__).resolve().parents[1] / "tests" / "fixtures"
 FIXTURE = FIXTURES / "davis346-aestream.aedat4"
 
 

@@ -11,7 +11,7 @@ from davis_io.types import TriggerKind
 from davis_io.usb import DeviceDisconnected, DeviceStalled, open_camera
 from davis_io.usb.emulated import EmulatedBackend, EmulatedDavis346, StreamFaults
 
-# Fixture facts (shared/fixtures/README.md): frame 2 reads out 1633953691007091..1633953691030743.
+# Fixture facts (tests/fixtures/README.md): frame 2 reads out 1633953691007091..1633953691030743.
 RESET_IN_FRAME_2 = 1633953691010000
 DROP_WINDOW = (1633953691000000, 1633953691003000)
 
