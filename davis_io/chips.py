@@ -1,10 +1,14 @@
-"""DAVIS camera models: sensor size per model, and chip names (AEDAT headers) mapped to models."""
+"""DAVIS camera models: sensor size per model, chip names (AEDAT headers), default frame timing."""
 
 from __future__ import annotations
 
 import re
 
-__all__ = ["SENSOR_SIZES", "identify_chip"]
+__all__ = ["DEFAULT_FRAME_GAP_US", "SENSOR_SIZES", "identify_chip"]
+
+DEFAULT_FRAME_GAP_US = 50_000
+"""Time from one frame's exposure start to the next one's beyond the exposure, by default (a
+camera and the emulator alike): room for the readout, so no exposure overlaps the next."""
 
 SENSOR_SIZES = {"DAVIS346": (346, 260), "DAVIS240": (240, 180)}
 """Camera model -> (width, height) in pixels of its DVS and APS arrays."""

@@ -93,6 +93,7 @@ class TrainingData:
         bounds: ``(2,)`` near and far depth of the scene along the optical axis.
         mix: ``(H, W, 3)`` linear RGB weights each pixel sums (colour filter).
         channel: ``(H, W)`` int64 response-curve channel of each pixel.
+        monochrome: the sensor has no colour filter: renders are luminance, one channel.
         test: held-out views with truth, if any.
         truth: training-view truth, if any (emulated sessions).
     """
@@ -107,6 +108,7 @@ class TrainingData:
     bounds: np.ndarray
     mix: np.ndarray
     channel: np.ndarray
+    monochrome: bool = False
     test: TestViews | None = None
     truth: TrainTruth | None = None
 

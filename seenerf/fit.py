@@ -168,11 +168,12 @@ def render_outputs(
         if data.test is not None
         else PAPER_EXPOSURES_S
     )
-    monochrome = bool(data.test is not None and data.test.hdr.shape[-1] == 1)
     registration = None
     if config.register_test_views and data.test is not None and similarity is not IDENTITY:
         mapped = score_views(
-            render_views(model, poses, data.intrinsics, data.image_size, exposures, monochrome),
+            render_views(
+                model, poses, data.intrinsics, data.image_size, exposures, data.monochrome
+            ),
             data,
         )
         poses, registration = register_test_poses(model, data, poses)
@@ -180,7 +181,7 @@ def render_outputs(
             "hdr_psnr": mapped["hdr"]["psnr"],
             "novel_exposure_psnr": mapped["novel_exposure"]["psnr"],
         }
-    views = render_views(model, poses, data.intrinsics, data.image_size, exposures, monochrome)
+    views = render_views(model, poses, data.intrinsics, data.image_size, exposures, data.monochrome)
     write_views(
         views,
         run_dir,

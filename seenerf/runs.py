@@ -112,7 +112,7 @@ def render_run(
         run.data.intrinsics,
         run.data.image_size,
         tuple(exposures),
-        monochrome=False,
+        monochrome=run.data.monochrome,
     )
     out_dir = run.run_dir / out_name
     write_views(

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from davis_io.poses.align import Similarity, rotation_error_deg
+from davis_io.geometry import Similarity, rotation_error_deg
 from seenerf.data import TrainingData
 from seenerf.evaluate import (
     align_channel_scale,

@@ -6,9 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from davis_io.emulator.truth import load_truth
-from davis_io.poses.align import interpolate_poses
-from davis_io.session import Session
+from davis_io.geometry import interpolate_poses
+from davis_io.session import Session, Truth
 from seenerf.data import TestViews, TrainingData, TrainTruth, pixel_layout
 from seenerf.errors import TrainingDataError
 
@@ -42,7 +41,6 @@ def load_training_data(session_dir: Path | str, b: int, *, keep_lost: bool = Fal
         scale = float(2 ** frames[0].bit_depth - 1)
         ldr = np.stack([f.image for f in frames]).astype(np.float32) / scale
         mix, channel = pixel_layout(session.color_filter, session.height, session.width)
-        truth_dir = session.truth_dir
         data = TrainingData(
             ldr=np.clip(ldr, 0.0, 1.0),
             exposure_s=(table.exposure_us[usable] * 1e-6).astype(np.float32),
@@ -54,16 +52,17 @@ def load_training_data(session_dir: Path | str, b: int, *, keep_lost: bool = Fal
             bounds=poses.bounds.astype(np.float32),
             mix=mix,
             channel=channel,
+            monochrome=not session.color_filter.is_color,
         )
-        if truth_dir is not None:
-            _attach_truth(data, truth_dir, usable, bins.split_us[usable])
+        truth = session.truth()
+        if truth is not None:
+            _attach_truth(data, truth, usable, bins.split_us[usable])
     return data.validate()
 
 
 def _attach_truth(
-    data: TrainingData, truth_dir: Path, usable: np.ndarray, split_us: np.ndarray
+    data: TrainingData, truth: Truth, usable: np.ndarray, split_us: np.ndarray
 ) -> None:
-    truth = load_truth(truth_dir)
     middle = truth.train_c2w.shape[1] // 2
     times = truth.train_time_us[usable].reshape(-1)
     order = np.argsort(times, kind="stable")

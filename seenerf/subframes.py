@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from davis_io.bins import subdivide, trapezoid_weights
-from davis_io.poses.align import interpolate_poses
+from davis_io.geometry import interpolate_poses
 from seenerf.data import TrainingData
 
 __all__ = [

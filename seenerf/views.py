@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from davis_io.poses.align import Similarity, align_poses
+from davis_io.geometry import Similarity, align_poses
 from seenerf.data import TrainingData
 from seenerf.model import SeeNerfModel
 from seenerf.rays import camera_rays
@@ -55,7 +55,7 @@ def truth_to_fit_frame(data: TrainingData) -> Similarity:
     """Similarity from the truth frame to the fit's (estimated) frame, from centres and axes.
 
     Aligns the estimated latent poses to the true poses at the same instants (camera centres
-    and orientations, :func:`~davis_io.poses.align.align_poses`) and inverts the result.
+    and orientations, :func:`~davis_io.geometry.align_poses`) and inverts the result.
     Without truth, or with fewer than three distinct centres, the frames are taken to coincide.
     """
     if data.truth is None or data.truth.latent_c2w is None:

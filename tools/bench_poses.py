@@ -22,11 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
-from davis_io.emulator import EmulatedCamera, load_truth, save_truth
+from davis_io.emulator import EmulatedCamera
 from davis_io.poses import estimate_poses
 from davis_io.poses.truth import compare_with_truth
 from davis_io.session import Session
 from davis_io.session.recorder import record
+from davis_io.session.truth import load_truth, save_truth
 
 TARGET_S = 120.0
 

@@ -44,10 +44,10 @@ def blur_model_psnr(
         the recorded frames against it (the noise floor), dB.
     """
     with Session.open(session_dir) as session:
-        camera = EmulatedCamera.of_session(session.manifest.device_config)
         split_us = session.bins(b).split_us
         chosen = np.linspace(0, session.frame_count - 1, frames).round().astype(int)
         recorded = [session.frame(int(i)) for i in chosen]
+    camera = EmulatedCamera.of_session(session_dir)
     model, noise = {count: [] for count in per_bin}, []
     for index, frame in zip(chosen, recorded, strict=True):
         clean = camera.noise_free_frame(frame) / ADC_TOP

@@ -5,10 +5,11 @@
 
 For an emulated session, renders (noise-free) what each pixel sees at the latent time points of
 a few exposures and compares the true change of ln intensity over each bin with the change the
-bin's events imply (calibrated counts times the contrast threshold: by default the one the
-camera configuration states). Over the pixels whose true change exceeds the threshold it prints
-the median ratio of the two, the least-squares slope of the event change on the true one, and
-their correlation. A ratio under 1 means the events undercount contrast.
+bin's events imply (calibrated counts times the contrast threshold: by default the mean of the
+sensor's true effective ON and OFF thresholds, from the session's truth). Over the pixels whose
+true change exceeds the threshold it prints the median ratio of the two, the least-squares slope
+of the event change on the true one, and their correlation. A ratio under 1 means the events
+undercount contrast.
 
 Events come late: a pixel's photoreceptor low-pass lags in the dark, and its refractory period
 lets a strong edge out at only one event per dead time, so the counts of a bin describe a change
@@ -23,9 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from davis_io.emulator import DVS_PRESETS, EmulatedCamera
+from davis_io.emulator import EmulatedCamera
 from davis_io.emulator.dvs import lin_log
-from davis_io.poses.estimate import stated_threshold
 from davis_io.session import Session
 
 SCANNED_LATENCIES_MS = tuple(range(0, 17, 2))
@@ -52,9 +52,11 @@ def log_changes(
     """
     with Session.open(session_dir) as session:
         bins = session.bins(b)
-        camera = EmulatedCamera.of_session(session.manifest.device_config)
-        threshold = threshold or stated_threshold(session)
-    linear_below = DVS_PRESETS[camera.config.dvs_preset].linlog_threshold
+        sensor = session.truth().sensor
+    camera = EmulatedCamera.of_session(session_dir)
+    effective = (sensor["effective_threshold_on"], sensor["effective_threshold_off"])
+    threshold = threshold or 0.5 * sum(effective)
+    linear_below = camera.sensor.dvs.linlog_threshold
     chosen = np.linspace(0, len(bins.split_us) - 1, frames).round().astype(int)
     true = []
     for latency_us in latencies_us:
@@ -89,7 +91,7 @@ def main() -> None:
     parser.add_argument("session", type=Path, help="an emulated session folder")
     parser.add_argument("--bins", type=int, default=4)
     parser.add_argument("--frames", type=int, default=3, help="exposures to compare")
-    parser.add_argument("--threshold", type=float, default=None, help="default: the nominal one")
+    parser.add_argument("--threshold", type=float, default=None, help="default: the true one")
     latency = parser.add_mutually_exclusive_group()
     latency.add_argument("--latency-ms", type=float, default=0.0, help="event latency assumed")
     latency.add_argument("--scan-latency", action="store_true", help="try 0 to 16 ms")

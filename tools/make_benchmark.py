@@ -34,8 +34,9 @@ from types import TracebackType
 from typing import Self
 
 from davis_io.aedat.aedat4_write import Aedat4Writer
-from davis_io.emulator import EmulatedCamera, save_truth
+from davis_io.emulator import EmulatedCamera
 from davis_io.session.recorder import record
+from davis_io.session.truth import save_truth
 from davis_io.types import Packet
 
 

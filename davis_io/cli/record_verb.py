@@ -39,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Record, printing a live status line and per-frame warnings on stderr."""
-    from davis_io.session.capture import CaptureRequest, record_capture
+    from davis_io.capture import CaptureRequest, record_capture
     from davis_io.session.folder import default_session_name
 
     request = CaptureRequest(

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from davis_io.emulator.response import apply_response
+from davis_io.emulator.response import Response, apply_response
 from davis_io.errors import UsageError
 
 __all__ = [
@@ -33,7 +33,7 @@ class ApsSettings:
     """How the APS turns radiance into ADC values.
 
     Attributes:
-        response: response curve name (see :mod:`davis_io.emulator.response`).
+        response: the response curve or its name (see :mod:`davis_io.emulator.response`).
         gain_per_s: multiplies radiance * exposure_s before the curve (1 / training exposure).
         bit_depth: ADC bits (10 on DAVIS).
         electrons_per_unit: photo-electrons collected at ``x = 1`` (sets shot noise); 0 turns
@@ -41,7 +41,7 @@ class ApsSettings:
         read_noise_e: RMS read noise in electrons.
     """
 
-    response: str = "reinhard_gamma"
+    response: str | Response = "reinhard_gamma"
     gain_per_s: float = 1 / 0.15
     bit_depth: int = 10
     electrons_per_unit: float = 3000.0

@@ -16,7 +16,7 @@ import numpy as np
 import pycolmap
 
 from davis_io.errors import DavisIOError
-from davis_io.poses.align import (
+from davis_io.geometry import (
     c2w_from_w2c,
     colmap_from_opencv_intrinsics,
     opencv_from_colmap_intrinsics,

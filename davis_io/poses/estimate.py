@@ -4,27 +4,24 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from davis_io.errors import UsageError
-from davis_io.poses.align import interpolate_poses
+from davis_io.geometry import interpolate_poses
 from davis_io.poses.colmap import ColmapError, SparseModel
-from davis_io.poses.latent import ResponseCurve, latent_images, sharpness
+from davis_io.poses.latent import latent_images, sharpness
 from davis_io.poses.recovery import reconstruct_with_recovery
-from davis_io.poses.truth import test_poses_from_truth
 from davis_io.session import Session, SessionPoses
 
 __all__ = [
     "DEFAULT_THRESHOLD",
     "PoseReport",
     "estimate_poses",
-    "known_response",
     "read_intrinsics",
-    "stated_threshold",
 ]
 
 DEFAULT_THRESHOLD = 0.3
@@ -50,8 +47,6 @@ class PoseReport:
         threshold_source: ``given``, ``camera configuration`` or ``default``.
         intrinsics: ``(fx, fy, cx, cy)`` pixels.
         bounds: near and far depth of the sparse points.
-        test_c2w: held-out views' poses in the estimated frame (emulated sessions with truth
-            only; for evaluation, they come from the true poses), or None.
     """
 
     registered: int
@@ -64,7 +59,6 @@ class PoseReport:
     threshold_source: str
     intrinsics: np.ndarray
     bounds: np.ndarray
-    test_c2w: np.ndarray | None = field(default=None)
 
     @property
     def registered_fraction(self) -> float:
@@ -99,36 +93,11 @@ class PoseReport:
     def from_json(cls, data: dict) -> PoseReport:
         """Inverse of :meth:`to_json`."""
         data = dict(data)
-        for key in ("track_counts", "intrinsics", "bounds", "test_c2w"):
-            data[key] = None if data[key] is None else np.asarray(data[key])
+        data.pop("test_c2w", None)  # written by earlier versions, from the truth
+        for key in ("track_counts", "intrinsics", "bounds"):
+            data[key] = np.asarray(data[key])
         data["tried"] = tuple(data["tried"])
         return cls(**data)
-
-
-def known_response(session: Session) -> ResponseCurve | None:
-    """The APS response curve when the session's camera states it (the emulator does)."""
-    name = session.manifest.device_config.get("emulator", {}).get("response")
-    if name is None:
-        return None
-    from davis_io.emulator.response import apply_response
-
-    exposure = np.exp(np.linspace(-12.0, 8.0, 4096))
-    return ResponseCurve(exposure, np.maximum.accumulate(apply_response(name, exposure)))
-
-
-def stated_threshold(session: Session) -> float | None:
-    """The DVS contrast threshold the camera configuration states (the emulator's), or None.
-
-    The mean of the recorded ON and OFF thresholds; sessions recorded before those were
-    stored name a DVS preset instead, looked up when it is a built-in one.
-    """
-    emulator = session.manifest.device_config.get("emulator", {})
-    if "dvs_threshold_on" in emulator and "dvs_threshold_off" in emulator:
-        return 0.5 * (float(emulator["dvs_threshold_on"]) + float(emulator["dvs_threshold_off"]))
-    from davis_io.emulator import DVS_PRESETS
-
-    params = DVS_PRESETS.get(emulator.get("dvs_preset"))
-    return None if params is None else 0.5 * (params.threshold_on + params.threshold_off)
 
 
 def _write_latent_frames(session, bins, threshold, response, image_dir, progress):
@@ -263,11 +232,9 @@ def estimate_poses(
             "seen from different positions. Record longer"
         )
     bins = session.bins(b)
-    response = known_response(session)
+    response = None
     if threshold is not None:
         threshold_source = "given"
-    elif (threshold := stated_threshold(session)) is not None:
-        threshold_source = "camera configuration"
     else:
         threshold, threshold_source = DEFAULT_THRESHOLD, "default"
     names, scores = _write_latent_frames(
@@ -303,7 +270,6 @@ def estimate_poses(
         threshold_source=threshold_source,
         intrinsics=poses.intrinsics,
         bounds=poses.bounds,
-        test_c2w=test_poses_from_truth(session.truth_dir, poses, bins.split_us),
     )
     report_path.write_text(json.dumps(report.to_json(), indent=1))
     return report

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from davis_io.poses.align import Similarity, align_poses, interpolate_poses, rotation_error_deg
+from davis_io.geometry import Similarity, align_poses, interpolate_poses, rotation_error_deg
 from davis_io.session import Session, SessionPoses
 
-__all__ = ["PoseErrors", "compare_with_truth", "store_true_poses", "test_poses_from_truth"]
+__all__ = ["PoseErrors", "compare_with_truth", "store_true_poses"]
 
 
 @dataclass(frozen=True)
@@ -63,24 +63,6 @@ def compare_with_truth(poses: SessionPoses, split_us: np.ndarray, truth) -> Pose
     return PoseErrors(rotation, distance / truth.extent, alignment)
 
 
-def test_poses_from_truth(
-    truth_dir: Path | None, poses: SessionPoses, split_us: np.ndarray
-) -> np.ndarray | None:
-    """The held-out views' poses in the estimated frame, or None without truth.
-
-    The true test poses are mapped by the inverse of the similarity fitted between
-    estimated and true training poses (:func:`~davis_io.poses.align.align_poses`). This uses
-    the truth and is for evaluation only.
-    """
-    if truth_dir is None or int(poses.registered.sum()) < 3:
-        return None
-    from davis_io.emulator import load_truth
-
-    truth = load_truth(truth_dir)
-    errors = compare_with_truth(poses, split_us, truth)
-    return errors.alignment.inverse().apply_poses(truth.test_c2w)
-
-
 def store_true_poses(session_dir: Path, b: int) -> None:
     """Store the truth's camera path as the session's poses for ``b`` bins per exposure.
 
@@ -89,7 +71,7 @@ def store_true_poses(session_dir: Path, b: int) -> None:
     intrinsics, no distortion, and depth bounds of the truth's depth range widened by 10 % each
     way. Evaluation only: it lets a fit run on an emulated session without pose estimation.
     """
-    from davis_io.emulator import load_truth
+    from davis_io.session.truth import load_truth
 
     with Session.open(session_dir) as session:
         truth = load_truth(session.truth_dir)

@@ -24,6 +24,7 @@ from davis_io.session.layout import (
 )
 from davis_io.session.manifest import SessionManifest, read_manifest
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
+from davis_io.session.truth import TRUTH_DIR, Truth, load_truth
 from davis_io.types import (
     EVENT_DTYPE,
     IMU_DTYPE,
@@ -34,9 +35,8 @@ from davis_io.types import (
     empty_events,
 )
 
-__all__ = ["Session", "TRUTH_DIR"]
+__all__ = ["Session"]
 
-TRUTH_DIR = "truth"
 _BINS_FIELDS = ("split_us", "weights", "raw", "calibrated", "event_count")
 _FRAME_FIELDS = ("image", "events_lost", *FRAME_TIMES)
 
@@ -115,6 +115,14 @@ class Session(Closing):
         """The ``truth/`` folder of an emulated session, or None."""
         truth = self.folder / TRUTH_DIR
         return truth if truth.is_dir() else None
+
+    def truth(self) -> Truth | None:
+        """The ground truth of an emulated session, or None: for scoring and oracles only.
+
+        Raises:
+            SessionError: ``truth/`` exists but cannot be read.
+        """
+        return load_truth(self.truth_dir) if self.truth_dir is not None else None
 
     @property
     def frame_count(self) -> int:

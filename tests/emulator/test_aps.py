@@ -52,7 +52,7 @@ def test_response_curves_hand_values():
     assert reinhard_gamma(np.array(0.0)) == 0.0
     assert np.all(np.diff(film(np.geomspace(1e-4, 1e4, 50))) > 0)
     with pytest.raises(UsageError, match="unknown response"):
-        apply_response("linear", np.ones(2))
+        apply_response("gamma-2.4", np.ones(2))
 
 
 def test_response_table_is_against_log_radiance_times_seconds():

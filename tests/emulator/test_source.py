@@ -7,12 +7,13 @@ import numpy as np
 import pytest
 
 from davis_io.aedat import write_aedat4
-from davis_io.emulator import EmulatedCamera, load_truth, save_truth
+from davis_io.emulator import EmulatedCamera
 from davis_io.emulator.aps import ApsSettings, expose
 from davis_io.emulator.response import apply_response
 from davis_io.errors import SessionError, UsageError
 from davis_io.session import Session
 from davis_io.session.recorder import record as record_session
+from davis_io.session.truth import load_truth, save_truth
 from davis_io.types import ColorFilter, PacketSource, TriggerKind
 
 SMALL = dict(width=64, height=48, focal_px=52.0, frames=2, test_views=2, exposure_us=20_000)
@@ -201,7 +202,7 @@ def test_truth_file_missing_a_field_is_a_clear_error(small, tmp_path):
     with pytest.raises(SessionError, match="missing"):
         load_truth(folder)
     (folder / "truth.h5").write_bytes(b"not hdf5")
-    with pytest.raises(SessionError, match="HDF5"):
+    with pytest.raises(SessionError, match="cannot be read"):
         load_truth(folder)
 
 
@@ -221,13 +222,18 @@ def test_truth_gives_the_true_pose_at_any_time(small):
 def test_a_session_names_the_camera_it_was_recorded_with(tmp_path):
     original = EmulatedCamera("lamp", seed=3, color_filter=ColorFilter.MONO, **SMALL)
     recorded = record_session(original, tmp_path / "s")
+    original.write_truth(recorded.folder)
+    again = EmulatedCamera.of_session(recorded.folder)
     with Session.open(recorded.folder) as session:
-        again = EmulatedCamera.of_session(session.manifest.device_config)
         frame = session.frame(0)
     assert again.config == original.config
     # The recorded frame is the noise-free one plus sensor noise: close, not equal.
     clean = again.noise_free_frame(frame).astype(float)
     difference = np.abs(frame.image - clean)
     assert 0 < difference.mean() < 0.05 * clean.mean()
-    with pytest.raises(UsageError, match="not recorded by the emulator"):
-        EmulatedCamera.of_session({"usb": {}})
+    with pytest.raises(SessionError, match="no ground truth"):
+        EmulatedCamera.of_session(tmp_path / "nowhere")
+    with h5py.File(recorded.folder / "truth" / "truth.h5", "a") as h5:
+        del h5.attrs["camera"]  # a truth written before it said how it was recorded
+    with pytest.raises(UsageError, match="does not say how it was recorded"):
+        EmulatedCamera.of_session(recorded.folder)

@@ -2,8 +2,9 @@
 
 import numpy as np
 
-from davis_io.emulator import EmulatedCamera, save_truth
+from davis_io.emulator import EmulatedCamera
 from davis_io.session.recorder import record
+from davis_io.session.truth import save_truth
 
 REDUCED = {"frames": 8, "test_views": 2, "baseline_m": 0.18}
 """The default run's emulated session: 8 views at 346 x 260 on a 4 x 2 grid of capture

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from pose_scenes import INTRINSICS, orbit_poses, render_box, texture
 
-from davis_io.poses.align import align_poses, rotation_error_deg
+from davis_io.geometry import align_poses, rotation_error_deg
 from davis_io.poses.colmap import ColmapError
 from davis_io.poses.recovery import reconstruct_with_recovery
 

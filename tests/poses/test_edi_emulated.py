@@ -1,10 +1,9 @@
 import numpy as np
 
-from davis_io.emulator import load_truth
 from davis_io.poses.edi import edi_latent_frames
-from davis_io.poses.estimate import known_response
-from davis_io.poses.latent import normalised_image
+from davis_io.poses.latent import ResponseCurve, normalised_image
 from davis_io.session import Session
+from davis_io.session.truth import load_truth
 
 
 def psnr(a, b, mask):
@@ -23,7 +22,10 @@ def test_latent_frame_beats_the_blurry_frame_on_an_emulated_frame(emulated_sessi
     folder, _ = emulated_session
     with Session.open(folder) as session:
         truth = load_truth(session.truth_dir)
-        bins, response = session.bins(4), known_response(session)
+        bins = session.bins(4)
+        response = ResponseCurve(  # the camera's true response, from the truth
+            np.exp(truth.crf_log_exposure), np.maximum.accumulate(truth.crf_value)
+        )
         gains, hard_gains = [], []
         for i in range(session.frame_count):
             frame = session.frame(i)

@@ -1,10 +1,11 @@
 import numpy as np
 
-from davis_io.emulator import EmulatedCamera, load_truth, save_truth
-from davis_io.poses.align import rotation_error_deg
+from davis_io.emulator import EmulatedCamera
+from davis_io.geometry import rotation_error_deg
 from davis_io.poses.truth import store_true_poses
 from davis_io.session import Session
 from davis_io.session.recorder import record
+from davis_io.session.truth import load_truth, save_truth
 
 
 def test_stored_poses_are_the_truth_at_the_latent_times(tmp_path):

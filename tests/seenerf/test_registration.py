@@ -7,7 +7,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from davis_io.poses.align import rotation_error_deg
+from davis_io.geometry import rotation_error_deg
 from seenerf.evaluate import psnr
 from seenerf.registration import RegistrationSpec, pose_update, register_view
 from seenerf.synthetic import PLANE_DEPTH, plane_radiance, true_response

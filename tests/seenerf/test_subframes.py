@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from davis_io.bins import trapezoid_weights
-from davis_io.poses.align import rotation_error_deg
+from davis_io.geometry import rotation_error_deg
 from seenerf.batching import FrameSampler
 from seenerf.config import FitConfig
 from seenerf.errors import ConfigError

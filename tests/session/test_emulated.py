@@ -2,8 +2,8 @@
 
 import pytest
 
+from davis_io.capture import CaptureRequest, record_capture
 from davis_io.session import Session
-from davis_io.session.capture import CaptureRequest, record_capture
 
 
 @pytest.mark.slow

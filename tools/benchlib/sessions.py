@@ -11,10 +11,10 @@ from pathlib import Path
 from benchlib.plan import SessionSpec
 from benchlib.results import ProcessUsage
 from benchlib.runner import python_command, run_measured
-from davis_io.emulator import load_truth
 from davis_io.errors import DavisIOError
 from davis_io.poses.truth import compare_with_truth
 from davis_io.session import Session, read_manifest
+from davis_io.session.truth import load_truth
 
 __all__ = ["BINS", "SessionOutcome", "prepare_session"]
 

@@ -1,18 +1,28 @@
-"""Choosing what ``seecap record`` reads (camera, AEDAT replay or emulator) and recording it."""
+"""``seecap record``'s sources: one registry of camera, AEDAT replay and emulator, then recording.
+
+Each source kind opens a packet source from a :class:`CaptureRequest`; the recorder in
+``davis_io.session`` takes any of them through the one packet-source interface and never
+imports a source itself. A kind may leave something beside the session once it is recorded
+(the emulator writes its ground truth into ``truth/``).
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from davis_io.chips import DEFAULT_FRAME_GAP_US
 from davis_io.errors import DeviceError, UsageError
 from davis_io.session.recorder import RecordingResult, record
 from davis_io.types import PacketSource
 
 __all__ = [
     "NO_CAMERA_ADVICE",
+    "SOURCE_KINDS",
     "WITHOUT_CAMERA",
     "CaptureRequest",
+    "SourceKind",
     "open_capture_source",
     "record_capture",
 ]
@@ -25,8 +35,6 @@ NO_CAMERA_ADVICE = (
     "plug a DAVIS346 or DAVIS240 into a USB port (check it with `seecap devices`; on Linux "
     f"install the permissions rule with `sudo seecap udev --install`); {WITHOUT_CAMERA}"
 )
-_FRAME_GAP_US = 50_000
-"""Default frame interval beyond the exposure (camera and emulator alike)."""
 
 
 @dataclass(frozen=True)
@@ -40,6 +48,8 @@ class CaptureRequest:
         serial: camera serial number (None: the only camera attached).
         replay: AEDAT file to replay instead of a camera.
         emulate: built-in scene to film with the emulator instead of a camera.
+        sensor: the emulator's sensor, ``default`` or ``random`` (drawn from ``seed``).
+        seed: the emulator's seed (shake, pixel mismatch, noise and a random sensor).
     """
 
     exposure_us: int | None = None
@@ -48,6 +58,21 @@ class CaptureRequest:
     serial: str | None = None
     replay: Path | None = None
     emulate: str | None = None
+    sensor: str = "default"
+    seed: int = 0
+
+    @property
+    def kind(self) -> str:
+        """``replay``, ``emulate`` or ``usb``.
+
+        Raises:
+            UsageError: both a replay file and a scene to emulate.
+        """
+        if self.replay is not None and self.emulate is not None:
+            raise UsageError("--replay and --emulate exclude each other: give one source")
+        if self.replay is not None:
+            return "replay"
+        return "emulate" if self.emulate is not None else "usb"
 
     @property
     def applied_exposure_us(self) -> int | None:
@@ -56,31 +81,19 @@ class CaptureRequest:
 
     def interval_us(self) -> int:
         """Frame interval to apply, µs."""
-        return self.frame_interval_us or (self.exposure_us or 0) + _FRAME_GAP_US
+        return self.frame_interval_us or (self.exposure_us or 0) + DEFAULT_FRAME_GAP_US
 
 
-def open_capture_source(request: CaptureRequest) -> PacketSource:
-    """Open the replay file, the emulator or the camera the request names.
+def _open_replay(request: CaptureRequest) -> PacketSource:
+    from davis_io.aedat import open_recording
 
-    Raises:
-        UsageError: both --replay and --emulate, or a camera without --exposure.
-        DeviceError: no camera found (with advice on what to plug in or which flag to use).
-    """
-    if request.replay is not None and request.emulate is not None:
-        raise UsageError("--replay and --emulate exclude each other: give one source")
-    if request.replay is not None:
-        from davis_io.aedat import open_recording
-
-        return open_recording(request.replay)
-    if request.emulate is not None:
-        return _open_emulator(request)
-    return _open_camera(request)
+    return open_recording(request.replay)
 
 
 def _open_emulator(request: CaptureRequest) -> PacketSource:
     from davis_io.emulator import EmulatedCamera
 
-    settings = {}
+    settings = {"sensor": request.sensor, "seed": request.seed}
     if request.exposure_us is not None:
         settings["exposure_us"] = request.exposure_us
         settings["frame_interval_us"] = request.interval_us()
@@ -104,8 +117,39 @@ def _open_camera(request: CaptureRequest) -> PacketSource:
         raise DeviceError(f"{error}; {WITHOUT_CAMERA}") from error
 
 
+@dataclass(frozen=True)
+class SourceKind:
+    """How to open one kind of source, and what it leaves beside a recorded session.
+
+    Attributes:
+        open: the packet source of a request.
+        after_recording: ``after_recording(source, session_folder)``, or None.
+    """
+
+    open: Callable[[CaptureRequest], PacketSource]
+    after_recording: Callable[[PacketSource, Path], None] | None = None
+
+
+SOURCE_KINDS: dict[str, SourceKind] = {
+    "usb": SourceKind(_open_camera),
+    "replay": SourceKind(_open_replay),
+    "emulate": SourceKind(_open_emulator, lambda camera, folder: camera.write_truth(folder)),
+}
+"""Every source ``seecap record`` can read, by :attr:`CaptureRequest.kind`."""
+
+
+def open_capture_source(request: CaptureRequest) -> PacketSource:
+    """Open the replay file, the emulator or the camera the request names.
+
+    Raises:
+        UsageError: both --replay and --emulate, or a camera without --exposure.
+        DeviceError: no camera found (with advice on what to plug in or which flag to use).
+    """
+    return SOURCE_KINDS[request.kind].open(request)
+
+
 def record_capture(request: CaptureRequest, out_dir: Path, **options) -> RecordingResult:
-    """Open the requested source, record it into ``out_dir``, and save emulator truth.
+    """Open the requested source and record it into ``out_dir`` (emulator: with ``truth/``).
 
     Args:
         request: the source and its settings.
@@ -114,9 +158,10 @@ def record_capture(request: CaptureRequest, out_dir: Path, **options) -> Recordi
             ``duration_us``, ``overwrite``, ``status_callback``, ``preview``).
 
     Returns:
-        The recording result (the emulator's ground truth is in ``out_dir/truth``).
+        The recording result.
     """
-    source = open_capture_source(request)
+    kind = SOURCE_KINDS[request.kind]
+    source = kind.open(request)
     result = record(
         source,
         out_dir,
@@ -124,9 +169,6 @@ def record_capture(request: CaptureRequest, out_dir: Path, **options) -> Recordi
         frames=request.frames,
         **options,
     )
-    truth = getattr(source, "truth", None) if request.emulate is not None else None
-    if truth is not None:
-        from davis_io.emulator import save_truth
-
-        save_truth(truth, result.folder / "truth")
+    if kind.after_recording is not None:
+        kind.after_recording(source, result.folder)
     return result

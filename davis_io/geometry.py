@@ -1,5 +1,8 @@
 """Pose geometry: similarity fits, pose errors, interpolation in time and frame conversions.
 
+Rotations are handled by SciPy's ``Rotation`` and ``Slerp``; the similarity fit (Umeyama) is
+our own, since neither SciPy nor pycolmap's Python API fits one with a scale to point pairs.
+
 Every pose here is a camera-to-world ``4x4`` matrix with OpenCV camera axes (x right, y down,
 z forward), the project's convention. COLMAP stores world-to-camera poses with the same camera
 axes, so the conversion from COLMAP is a rigid inverse; this module is the only place that does
@@ -11,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
 
 from davis_io.errors import UsageError
 
@@ -21,9 +25,7 @@ __all__ = [
     "colmap_from_opencv_intrinsics",
     "opencv_from_colmap_intrinsics",
     "interpolate_poses",
-    "quaternion_from_rotation",
     "rotation_error_deg",
-    "rotation_from_quaternion",
     "umeyama",
 ]
 
@@ -163,76 +165,6 @@ def colmap_from_opencv_intrinsics(intrinsics: np.ndarray) -> np.ndarray:
     return out
 
 
-def quaternion_from_rotation(rotation: np.ndarray) -> np.ndarray:
-    """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of a ``(3, 3)`` rotation matrix."""
-    m = np.asarray(rotation, float)
-    # The largest of the four squared components is the numerically safe one to divide by.
-    squares = np.array(
-        [
-            1 + m[0, 0] + m[1, 1] + m[2, 2],
-            1 + m[0, 0] - m[1, 1] - m[2, 2],
-            1 - m[0, 0] + m[1, 1] - m[2, 2],
-            1 - m[0, 0] - m[1, 1] + m[2, 2],
-        ]
-    )
-    k = int(np.argmax(squares))
-    big = 0.5 * np.sqrt(max(squares[k], 1e-300))
-    if k == 0:
-        q = [
-            big,
-            (m[2, 1] - m[1, 2]) / (4 * big),
-            (m[0, 2] - m[2, 0]) / (4 * big),
-            (m[1, 0] - m[0, 1]) / (4 * big),
-        ]
-    elif k == 1:
-        q = [
-            (m[2, 1] - m[1, 2]) / (4 * big),
-            big,
-            (m[0, 1] + m[1, 0]) / (4 * big),
-            (m[0, 2] + m[2, 0]) / (4 * big),
-        ]
-    elif k == 2:
-        q = [
-            (m[0, 2] - m[2, 0]) / (4 * big),
-            (m[0, 1] + m[1, 0]) / (4 * big),
-            big,
-            (m[1, 2] + m[2, 1]) / (4 * big),
-        ]
-    else:
-        q = [
-            (m[1, 0] - m[0, 1]) / (4 * big),
-            (m[0, 2] + m[2, 0]) / (4 * big),
-            (m[1, 2] + m[2, 1]) / (4 * big),
-            big,
-        ]
-    q = np.array(q) / np.linalg.norm(q)
-    return q if q[0] >= 0 else -q
-
-
-def rotation_from_quaternion(quaternion: np.ndarray) -> np.ndarray:
-    """``(3, 3)`` rotation matrix of a quaternion ``(w, x, y, z)`` (normalised first)."""
-    w, x, y, z = np.asarray(quaternion, float) / np.linalg.norm(quaternion)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
-def _slerp(q0: np.ndarray, q1: np.ndarray, fraction: float) -> np.ndarray:
-    """Spherical linear interpolation between unit quaternions along the shorter arc."""
-    dot = float(np.dot(q0, q1))
-    if dot < 0:
-        q1, dot = -q1, -dot
-    if dot > 0.9995:  # nearly parallel: linear interpolation is exact to float precision
-        q = q0 + fraction * (q1 - q0)
-        return q / np.linalg.norm(q)
-    angle = np.arccos(dot)
-    return (np.sin((1 - fraction) * angle) * q0 + np.sin(fraction * angle) * q1) / np.sin(angle)
-
-
 def interpolate_poses(
     known_times_us: np.ndarray, known_c2w: np.ndarray, query_times_us: np.ndarray
 ) -> np.ndarray:
@@ -264,13 +196,14 @@ def interpolate_poses(
     query = np.asarray(query_times_us, np.int64)
     if len(times) == 1:
         return np.repeat(known_c2w[:1], len(query), axis=0)
-    quaternions = np.array([quaternion_from_rotation(c2w[:3, :3]) for c2w in known_c2w])
-    upper = np.clip(np.searchsorted(times, query), 1, len(times) - 1)
+    rotations = Slerp(times, Rotation.from_matrix(known_c2w[:, :3, :3]))
+    clamped = np.clip(query, times[0], times[-1])
+    upper = np.clip(np.searchsorted(times, clamped), 1, len(times) - 1)
     lower = upper - 1
-    fractions = np.clip((query - times[lower]) / (times[upper] - times[lower]), 0.0, 1.0)
+    fractions = (clamped - times[lower]) / (times[upper] - times[lower])
     out = np.tile(np.eye(4), (len(query), 1, 1))
-    for row, (i, j, fraction) in enumerate(zip(lower, upper, fractions, strict=True)):
-        rotation = _slerp(quaternions[i], quaternions[j], fraction)
-        out[row, :3, :3] = rotation_from_quaternion(rotation)
-        out[row, :3, 3] = (1 - fraction) * known_c2w[i, :3, 3] + fraction * known_c2w[j, :3, 3]
+    out[:, :3, :3] = rotations(clamped).as_matrix()
+    out[:, :3, 3] = (1 - fractions)[:, None] * known_c2w[lower, :3, 3] + fractions[
+        :, None
+    ] * known_c2w[upper, :3, 3]
     return out

@@ -2,14 +2,12 @@ import numpy as np
 import pytest
 
 from davis_io.errors import UsageError
-from davis_io.poses.align import (
+from davis_io.geometry import (
     c2w_from_w2c,
     colmap_from_opencv_intrinsics,
     interpolate_poses,
     opencv_from_colmap_intrinsics,
-    quaternion_from_rotation,
     rotation_error_deg,
-    rotation_from_quaternion,
     umeyama,
 )
 
@@ -70,16 +68,6 @@ def test_c2w_from_w2c_by_hand():
     c2w = c2w_from_w2c(rotation, [1, 0, 0])
     assert np.allclose(c2w[:3, :3], rotation.T)
     assert np.allclose(rotation @ c2w[:3, 3] + [1, 0, 0], 0)  # the centre maps to the origin
-
-
-def test_quaternion_round_trip_and_hand_value():
-    # Rz(90): q = (cos 45, 0, 0, sin 45).
-    assert np.allclose(quaternion_from_rotation(rz(90)), [np.sqrt(0.5), 0, 0, np.sqrt(0.5)])
-    rng = np.random.default_rng(1)
-    for _ in range(20):
-        q = rng.standard_normal(4)
-        rotation = rotation_from_quaternion(q)
-        assert np.allclose(rotation_from_quaternion(quaternion_from_rotation(rotation)), rotation)
 
 
 def test_interpolation_slerps_rotation_and_lerps_centre():

@@ -1,0 +1,167 @@
+"""``EmulatorConfig``: every setting of an emulated recording (same settings, same bytes)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from davis_io.chips import DEFAULT_FRAME_GAP_US
+from davis_io.emulator.dvs import DVS_PRESETS
+from davis_io.emulator.raytrace import PinholeCamera
+from davis_io.emulator.response import RESPONSE_CURVES
+from davis_io.emulator.sensor import SENSOR_KINDS, Sensor, default_sensor, draw_sensor
+from davis_io.errors import UsageError
+from davis_io.types import ColorFilter
+
+__all__ = ["EmulatorConfig"]
+
+
+@dataclass(frozen=True)
+class EmulatorConfig:
+    """Everything that defines an emulated recording; the same config gives the same bytes.
+
+    Attributes:
+        scene: built-in scene name (``room``, ``lamp``, ``corridor``).
+        frames: number of training frames (views).
+        test_views: number of held-out views in the truth.
+        exposure_us: APS exposure of every frame, µs.
+        frame_interval_us: SOF to SOF, µs; 0 means ``exposure_us`` + the default gap (50 ms).
+        readout_us: reset read before and signal read after each exposure, µs.
+        lead_us: device time before the first frame's readout, µs.
+        subframes: renders per exposure for the APS integral (trapezoid weights).
+        dvs_step_us: time between DVS samples, µs.
+        sensor: ``default`` (the next three settings name the sensor) or ``random`` (drawn from
+            ``seed``: :mod:`davis_io.emulator.sensor`).
+        dvs_preset: DVS pixel preset (``clean``, ``noisy``, ``v2e-clean``, ``v2e-noisy``).
+        response: APS response curve (``reinhard_gamma``, ``film``, ``linear``, ``s_curve``).
+        color_filter: colour filter of APS and DVS pixels.
+        aps_noise: add shot and read noise to frames.
+        gain_exposure_us: exposure whose reciprocal is the sensor gain, µs (0: ``exposure_us``,
+            which keeps every exposure equally bright; another value makes an exposure bracket:
+            shorter is darker, longer clips).
+        noise_scale: multiplier of the DVS leak and shot-noise rates.
+        width: sensor columns.
+        height: sensor rows.
+        focal_px: focal length in pixels (principal point at the image centre).
+        shake: RMS hand-shake rotation, degrees.
+        shake_translation_m: RMS hand-shake translation, metres.
+        baseline_m: spacing of capture positions, metres; 0 takes the scene's own.
+        seed: seeds the shake, the pixel mismatch and all noise.
+        packet_us: device time per packet, µs.
+        imu_rate_hz: IMU samples per second (ideal gyro and accelerometer, camera axes); 0 for
+            none.
+    """
+
+    scene: str = "room"
+    frames: int = 16
+    test_views: int = 8
+    exposure_us: int = 150_000
+    frame_interval_us: int = 0
+    readout_us: int = 8_000
+    lead_us: int = 20_000
+    subframes: int = 17
+    dvs_step_us: int = 2_000
+    sensor: str = "default"
+    dvs_preset: str = "noisy"
+    response: str = "reinhard_gamma"
+    color_filter: ColorFilter = ColorFilter.RGGB
+    aps_noise: bool = True
+    gain_exposure_us: int = 0
+    noise_scale: float = 1.0
+    width: int = 346
+    height: int = 260
+    focal_px: float = 280.0
+    shake: float = 0.8
+    shake_translation_m: float = 0.002
+    baseline_m: float = 0.0
+    seed: int = 0
+    packet_us: int = 10_000
+    imu_rate_hz: int = 1000
+
+    def __post_init__(self) -> None:
+        try:
+            object.__setattr__(self, "color_filter", ColorFilter(self.color_filter))
+        except ValueError:
+            names = ", ".join(f.value for f in ColorFilter)
+            raise UsageError(f"colour filter {self.color_filter!r} is not one of {names}") from None
+        if self.frame_interval_us == 0:
+            object.__setattr__(self, "frame_interval_us", self.exposure_us + DEFAULT_FRAME_GAP_US)
+        problems = []
+        if self.width < 2 or self.height < 2 or self.focal_px <= 0:
+            problems.append("width and height of at least 2 pixels and a positive focal length")
+        if self.shake < 0 or self.shake_translation_m < 0 or self.baseline_m < 0:
+            problems.append("shake, shake translation and baseline must not be negative")
+        if self.frames < 1 or self.test_views < 0 or self.subframes < 2:
+            problems.append("frames >= 1, test_views >= 0 and subframes >= 2 are needed")
+        if self.gain_exposure_us < 0 or self.noise_scale < 0:
+            problems.append("gain exposure and noise scale must not be negative")
+        if min(self.exposure_us, self.readout_us, self.dvs_step_us, self.packet_us) <= 0:
+            problems.append("exposure, readout, DVS step and packet durations must be positive")
+        if not 0 <= self.imu_rate_hz <= 1_000_000:
+            problems.append(f"IMU rate {self.imu_rate_hz} Hz must be within 0..1000000")
+        shortest_us = self.exposure_us + 2 * self.readout_us + self.dvs_step_us
+        if self.frame_interval_us < shortest_us:
+            problems.append(
+                f"frame interval {self.frame_interval_us} µs is shorter than exposure + two "
+                f"readouts + one DVS step ({shortest_us} µs)"
+            )
+        if self.sensor not in SENSOR_KINDS:
+            problems.append(f"sensor {self.sensor!r} is not one of {', '.join(SENSOR_KINDS)}")
+        if self.dvs_preset not in DVS_PRESETS:
+            problems.append(
+                f"DVS preset {self.dvs_preset!r} is not one of {', '.join(DVS_PRESETS)}"
+            )
+        if self.response not in RESPONSE_CURVES:
+            problems.append(
+                f"response {self.response!r} is not one of {', '.join(RESPONSE_CURVES)}"
+            )
+        if problems:
+            raise UsageError("emulator settings: " + "; ".join(problems))
+
+    @property
+    def camera(self) -> PinholeCamera:
+        """The sensor's pinhole intrinsics."""
+        return PinholeCamera(
+            self.width,
+            self.height,
+            self.focal_px,
+            self.focal_px,
+            (self.width - 1) / 2,
+            (self.height - 1) / 2,
+        )
+
+    @property
+    def sensor_model(self) -> Sensor:
+        """The sensor these settings name, or the one drawn from the seed."""
+        if self.sensor == "random":
+            sensor = draw_sensor(self.seed)
+        else:
+            sensor = default_sensor(self.dvs_preset, self.response, self.color_filter)
+        return sensor.with_noise_scaled(self.noise_scale)
+
+    @property
+    def gain_per_s(self) -> float:
+        """Sensor gain, 1 / s: the response's input is gain x radiance x exposure_s."""
+        return 1e6 / (self.gain_exposure_us or self.exposure_us)
+
+    def frame_windows(self) -> np.ndarray:
+        """``(F, 4)`` int64 readout start, exposure start, exposure end, readout end, µs."""
+        start = self.lead_us + np.arange(self.frames, dtype=np.int64) * self.frame_interval_us
+        exposure_start = start + self.readout_us
+        exposure_end = exposure_start + self.exposure_us
+        return np.stack([start, exposure_start, exposure_end, exposure_end + self.readout_us], 1)
+
+    @property
+    def end_us(self) -> int:
+        """Device time of the last DVS sample, µs."""
+        return int(self.frame_windows()[-1, 3]) + self.lead_us
+
+    def to_json(self) -> dict:
+        """JSON-safe settings (:meth:`from_json` makes the same config again)."""
+        return {**asdict(self), "color_filter": self.color_filter.value}
+
+    @classmethod
+    def from_json(cls, data: dict) -> EmulatorConfig:
+        """Inverse of :meth:`to_json`."""
+        return cls(**data)
