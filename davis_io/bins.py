@@ -145,8 +145,9 @@ def bin_exposure(
     b: int,
     width: int,
     height: int,
+    contrast: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> ExposureBins:
-    """Bin the events of one exposure and calibrate the counts (``seenerf-reference.md`` §1.6).
+    """Bin the events of one exposure and calibrate the counts (photometric calibration, h()).
 
     Args:
         events: event array (``EVENT_DTYPE``) sorted by ``t``; only events with
@@ -157,6 +158,9 @@ def bin_exposure(
         b: number of bins, ``>= 1``.
         width: sensor width in pixels.
         height: sensor height in pixels.
+        contrast: per-pixel ``(H * W,)`` ln-intensity change of one ON and of one OFF event
+            (the sensor's calibrated thresholds); ``calibrated`` is then the ln change per bin
+            instead of a count, each event and offset weighted by its polarity's threshold.
 
     Returns:
         The bins of this exposure (see :class:`ExposureBins`).
@@ -171,11 +175,19 @@ def bin_exposure(
     split_us = split_times_us(times, exposure_start_us, exposure_end_us, b)
     key = _bin_pixel_keys(window, b, width, height)
     polarity = window["p"].astype(np.float64)
-    counts = np.bincount(key, weights=polarity, minlength=b * width * height)
-    offsets = _calibration_offsets(times, polarity > 0, key, split_us, b, width * height)
+    pixels = width * height
+    counts = np.bincount(key, weights=polarity, minlength=b * pixels)
+    size = (np.ones(pixels), np.ones(pixels)) if contrast is None else contrast
+    is_on = polarity > 0
+    weighted = counts
+    if contrast is not None:
+        pixel = key % pixels
+        change = np.where(is_on, size[0][pixel], -size[1][pixel])
+        weighted = np.bincount(key, weights=change, minlength=b * pixels)
+    offsets = _calibration_offsets(times, is_on, key, split_us, b, pixels, size)
     shape = (b, height, width)
     raw = np.clip(counts, _RAW_LIMITS.min, _RAW_LIMITS.max).astype(_RAW_DTYPE).reshape(shape)
-    calibrated = (counts + offsets.ravel()).astype(np.float32).reshape(shape)
+    calibrated = (weighted + offsets.ravel()).astype(np.float32).reshape(shape)
     return ExposureBins(split_us, trapezoid_weights(split_us), raw, calibrated, count)
 
 
@@ -232,12 +244,14 @@ def _calibration_offsets(
     split_us: np.ndarray,
     b: int,
     pixels: int,
+    size: tuple[np.ndarray, np.ndarray],
 ) -> np.ndarray:
     """Fractional h() offsets per bin and pixel, ``(b, pixels)`` float64.
 
     Events are in time order, so the first event of a (bin, pixel) key has the smallest index
     and time, the last the largest. ``2 * index + is_on`` keeps that order and carries the
-    polarity along, so one minimum and one maximum per key give both.
+    polarity along, so one minimum and one maximum per key give both. An offset is a share of
+    the event at the boundary, so it is that share of its polarity's ``size`` at the pixel.
     """
     count = len(times)
     code_type = np.int64 if 2 * count + 1 > np.iinfo(key.dtype).max else key.dtype
@@ -256,14 +270,23 @@ def _calibration_offsets(
     last_p = np.where(has_event, 2.0 * (last_code.reshape(b, pixels) & 1) - 1, 0.0)
     first_t = np.where(has_event, first_t.reshape(b, pixels), 0)
     last_t = np.where(has_event, last_t.reshape(b, pixels), 0)
+    # The signed size of each (bin, pixel)'s last event: +size_on, -size_off or 0.
+    last_size = np.where(last_p > 0, size[0], np.where(last_p < 0, -size[1], 0.0))
     offsets = np.zeros((b, pixels), dtype=np.float64)
     for i in range(b - 1):
         edges = _BinEdges(
-            has_event[i], has_event[i + 1], last_t[i], first_t[i + 1], last_p[i], first_p[i + 1]
+            has_event[i],
+            has_event[i + 1],
+            last_t[i],
+            first_t[i + 1],
+            last_p[i],
+            first_p[i + 1],
+            last_size[i],
         )
         _boundary_offsets(offsets, i, edges, int(split_us[i + 1]))
-    # Last bin: +p_last / 2 wherever it has events (expected residual of a uniform crossing).
-    offsets[b - 1] += 0.5 * last_p[b - 1]
+    # Last bin: half its last event wherever it has events (expected residual of a uniform
+    # crossing).
+    offsets[b - 1] += 0.5 * last_size[b - 1]
     return offsets
 
 
@@ -272,7 +295,8 @@ class _BinEdges:
     """Per pixel, what touches the boundary between bin i and bin i+1.
 
     Where a bin has no event at a pixel its time and polarity are 0; the masks ``here`` and
-    ``after`` keep those out of every result.
+    ``after`` keep those out of every result. ``last_size`` is the signed size of bin i's last
+    event (its polarity, or its polarity's threshold at the pixel).
     """
 
     here: np.ndarray
@@ -281,6 +305,7 @@ class _BinEdges:
     next_t: np.ndarray
     last_p: np.ndarray
     next_p: np.ndarray
+    last_size: np.ndarray
 
 
 def _boundary_offsets(offsets: np.ndarray, i: int, edges: _BinEdges, boundary_us: int) -> None:
@@ -296,7 +321,7 @@ def _boundary_offsets(offsets: np.ndarray, i: int, edges: _BinEdges, boundary_us
     same = edges.here & edges.after & (edges.last_p == edges.next_p)
     gap_end = (boundary_us + 1 - edges.last_t).astype(np.float64)
     gap_pre = (edges.next_t + 1 - boundary_us).astype(np.float64)
-    share = np.where(same, edges.last_p * gap_end / np.maximum(gap_end + gap_pre, 1.0), 0.0)
+    share = np.where(same, edges.last_size * gap_end / np.maximum(gap_end + gap_pre, 1.0), 0.0)
     offsets[i] += share
     offsets[i + 1] -= share
-    offsets[i] += np.where(edges.here & ~edges.after, 0.5 * edges.last_p, 0.0)
+    offsets[i] += np.where(edges.here & ~edges.after, 0.5 * edges.last_size, 0.0)

@@ -6,7 +6,7 @@
 For an emulated session, renders (noise-free) what each pixel sees at the latent time points of
 a few exposures and compares the true change of ln intensity over each bin with the change the
 bin's events imply (calibrated counts times the contrast threshold: by default the mean of the
-sensor's true effective ON and OFF thresholds, from the session's truth). Over the pixels whose
+median pixel's true ON and OFF thresholds, from the session's truth). Over the pixels whose
 true change exceeds the threshold it prints the median ratio of the two, the least-squares slope
 of the event change on the true one, and their correlation. A ratio under 1 means the events
 undercount contrast.
@@ -54,8 +54,7 @@ def log_changes(
         bins = session.bins(b)
         sensor = session.truth().sensor
     camera = EmulatedCamera.of_session(session_dir)
-    effective = (sensor["effective_threshold_on"], sensor["effective_threshold_off"])
-    threshold = threshold or 0.5 * sum(effective)
+    threshold = threshold or 0.5 * (sensor["median_threshold_on"] + sensor["median_threshold_off"])
     linear_below = camera.sensor.dvs.linlog_threshold
     chosen = np.linspace(0, len(bins.split_us) - 1, frames).round().astype(int)
     true = []

@@ -20,6 +20,7 @@ VERBS: dict[str, str] = {
     "inspect": "davis_io.cli.inspect_verb",
     "record": "davis_io.cli.record_verb",
     "bins": "davis_io.cli.bins_verb",
+    "calibrate": "davis_io.cli.calibrate_verb",
     "poses": "davis_io.cli.poses_verb",
     "export": "davis_io.cli.export_verb",
     "devices": "davis_io.cli.devices_verb",

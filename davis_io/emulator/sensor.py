@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from davis_io.emulator.dvs import DVS_PRESETS, DvsParams
+from davis_io.emulator.dvs import DVS_PRESETS, DvsParams, DvsPixels
 from davis_io.emulator.response import RESPONSE_CURVES, Response
 from davis_io.errors import UsageError
 from davis_io.types import ColorFilter
@@ -53,6 +53,10 @@ class Sensor:
     color_filter: ColorFilter
     latency_us: int = 0
 
+    def step_delay_us(self, step_us: int) -> int:
+        """How late a pixel fires by its one-step delay, at DVS steps of ``step_us``."""
+        return step_us if self.dvs.one_step_delay and self.dvs.cutoff_hz > 0 else 0
+
     def with_noise_scaled(self, scale: float) -> Sensor:
         """The same sensor with its DVS leak and shot-noise rates times ``scale``."""
         if scale == 1.0:
@@ -64,20 +68,27 @@ class Sensor:
         )
         return dataclasses.replace(self, dvs=dvs)
 
-    def to_json(self, effective_thresholds: tuple[float, float] | None = None) -> dict:
-        """JSON-safe values; ``effective_thresholds`` adds the pixels' harmonic-mean ON / OFF.
+    def to_json(self, pixels: DvsPixels | None = None, step_us: int = 0) -> dict:
+        """JSON-safe values; with the drawn ``pixels``, their thresholds' median and harmonic mean.
 
-        The harmonic mean is the threshold one count per pixel stands for on average (a change
-        ``d`` gives ``d / theta`` events at a pixel of threshold ``theta``).
+        A calibration measures the median pixel's threshold; the harmonic mean is the one a
+        count stands for on average (a change ``d`` gives ``d / theta`` events at a pixel of
+        threshold ``theta``). ``event_delay_us`` adds to the latency the one DVS step of
+        ``step_us`` by which a one-step-delay pixel fires late (the low-pass lag, which depends
+        on the light, is not in it).
         """
         out = {
             "dvs": dataclasses.asdict(self.dvs),
             "response": self.response.to_json(),
             "color_filter": self.color_filter.value,
             "latency_us": self.latency_us,
+            "event_delay_us": self.latency_us + self.step_delay_us(step_us),
         }
-        if effective_thresholds is not None:
-            out["effective_threshold_on"], out["effective_threshold_off"] = effective_thresholds
+        if pixels is not None:
+            for name, values in (("on", pixels.threshold_on), ("off", pixels.threshold_off)):
+                values = np.asarray(values, np.float64)
+                out[f"median_threshold_{name}"] = float(np.median(values))
+                out[f"harmonic_threshold_{name}"] = float(1.0 / np.mean(1.0 / values))
         return out
 
 

@@ -38,10 +38,6 @@ def _ldr_bracket(hdr: np.ndarray, config: EmulatorConfig, sensor: Sensor) -> np.
     return np.round(sensor.response(x) * 255).astype(np.uint8)
 
 
-def _harmonic_mean(values: np.ndarray) -> float:
-    return float(1.0 / np.mean(1.0 / np.asarray(values, np.float64)))
-
-
 def build_truth(
     config: EmulatorConfig,
     sensor: Sensor,
@@ -71,7 +67,6 @@ def build_truth(
     test_c2w = look_at(test_positions, scene.target) if config.test_views else np.empty((0, 4, 4))
     test_hdr, _ = _render_views(scene, config, sensor, test_c2w)
     log_exposure, value = response_table(sensor.response, config.gain_per_s)
-    effective = (_harmonic_mean(pixels.threshold_on), _harmonic_mean(pixels.threshold_off))
     rest = trajectory.positions
     extent = max(float(np.max(np.linalg.norm(rest[:, None] - rest[None], axis=2))), baseline)
     finite = train_depth[np.isfinite(train_depth)]
@@ -98,5 +93,7 @@ def build_truth(
         path_time_us=path_time_us,
         path_c2w=trajectory.c2w(path_time_us),
         camera=config.to_json(),
-        sensor=sensor.to_json(effective),
+        sensor=sensor.to_json(pixels, config.dvs_step_us),
+        pixel_threshold_on=pixels.threshold_on.reshape(config.height, config.width),
+        pixel_threshold_off=pixels.threshold_off.reshape(config.height, config.width),
     )

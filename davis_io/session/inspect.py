@@ -92,7 +92,21 @@ def _summary(session: Session) -> dict:
         "events_per_exposure_median": None if counts is None else _median(counts),
         "bins_stored": session.stored_bins(),
         "drops": dataclasses.asdict(manifest.drops),
+        "calibration": _calibration(session),
         "truth": str(session.truth_dir) if session.truth_dir else None,
+    }
+
+
+def _calibration(session: Session) -> dict | None:
+    """The measured sensor facts, or None before ``seecap calibrate`` (or a fit) ran."""
+    calibration = session.calibration()
+    if calibration is None:
+        return None
+    facts = calibration.facts()
+    return {
+        key: round(value, 4) if isinstance(value, float) else value
+        for key, value in facts.items()
+        if key != "method"
     }
 
 

@@ -34,8 +34,10 @@ class SessionBins:
         split_us: ``(F, b+1)`` int64 latent time points: exposure start, bin starts, exposure end.
         weights: ``(F, b+1)`` float64 trapezoid weights, rows sum to 1.
         raw: ``(F, b, H, W)`` int16 signed counts.
-        calibrated: ``(F, b, H, W)`` float32 counts with the h() offsets.
+        calibrated: ``(F, b, H, W)`` float32 counts with the h() offsets, or with ``contrast``
+            the ln intensity change of each bin (events weighted by their thresholds).
         event_count: ``(F,)`` int64 events inside each exposure window.
+        contrast: ``calibrated`` is in ln units (:meth:`Session.contrast_bins`), not counts.
     """
 
     b: int
@@ -44,6 +46,7 @@ class SessionBins:
     raw: np.ndarray
     calibrated: np.ndarray
     event_count: np.ndarray
+    contrast: bool = False
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,11 @@ import numpy as np
 
 from davis_io.bins import bin_exposure
 from davis_io.errors import SessionError
+from davis_io.session.calibration import (
+    SensorCalibration,
+    read_calibration,
+    write_calibration,
+)
 from davis_io.session.layout import (
     EVENT_FIELDS,
     FRAME_TIMES,
@@ -220,6 +225,42 @@ class Session(Closing):
         arrays = {name: group[name][:count] for name in _BINS_FIELDS}
         return SessionBins(b=int(b), **arrays)
 
+    def contrast_bins(self, b: int, calibration: SensorCalibration) -> SessionBins:
+        """Bins for ``b`` in light time, whose ``contrast`` is the ln change of each bin.
+
+        Each exposure's events are cut ``calibration.latency_us`` later than the exposure (when
+        the events of its light come), each event weighs its pixel's calibrated threshold, and
+        the latent time points are moved back onto the exposure's clock. Computed, not stored.
+
+        Raises:
+            SessionError: bad ``b``.
+        """
+        if int(b) != b or b < 1:
+            raise SessionError(f"number of bins {b!r} must be a whole number >= 1")
+        table, latency = self.frames_table(), int(calibration.latency_us)
+        shape, pixels = (self.height, self.width), self.height * self.width
+        sizes = []
+        for threshold, factors in (
+            (calibration.threshold_on, calibration.pixel_factor_on),
+            (calibration.threshold_off, calibration.pixel_factor_off),
+        ):
+            factors = factors if factors.shape == shape else np.ones(shape)
+            sizes.append(threshold * np.asarray(factors, np.float64).reshape(pixels))
+        rows = []
+        for start_us, end_us in zip(table.exposure_start_us, table.exposure_end_us, strict=True):
+            start, end = int(start_us) + latency, int(end_us) + latency
+            window = self.events_between(start, end)
+            rows.append(bin_exposure(window, start, end, b, self.width, self.height, tuple(sizes)))
+        return SessionBins(
+            b=int(b),
+            split_us=np.stack([row.split_us for row in rows]) - latency,
+            weights=np.stack([row.weights for row in rows]),
+            raw=np.stack([row.raw for row in rows]),
+            calibrated=np.stack([row.calibrated for row in rows]),
+            event_count=np.array([row.event_count for row in rows], np.int64),
+            contrast=True,
+        )
+
     def poses(self, b: int) -> SessionPoses | None:
         """Poses stored for ``b``, or None when none were estimated yet."""
         path = poses_path(b)
@@ -258,6 +299,30 @@ class Session(Closing):
             group["intrinsics"] = np.asarray(poses.intrinsics, np.float64)
             group["intrinsics"].attrs["distortion"] = np.asarray(poses.distortion, np.float64)
             group["bounds"] = np.asarray(poses.bounds, np.float64)
+
+    def calibration(self) -> SensorCalibration | None:
+        """The sensor calibration measured from this recording, or None before it is.
+
+        Raises:
+            SessionError: the stored calibration cannot be read.
+        """
+        return read_calibration(self._h5)
+
+    def write_calibration(self, calibration: SensorCalibration) -> None:
+        """Store (or replace) the sensor calibration.
+
+        Raises:
+            SessionError: the pixel factors do not fit the sensor, or it needs repair first.
+        """
+        shape = (self.height, self.width)
+        for name in ("pixel_factor_on", "pixel_factor_off"):
+            if getattr(calibration, name).shape not in (shape, (0, 0)):
+                raise SessionError(
+                    f"calibration {name} has shape {getattr(calibration, name).shape}, the "
+                    f"sensor is {shape}"
+                )
+        with self._writable() as h5:
+            write_calibration(h5, calibration)
 
     def _compute_bins(self, b: int) -> None:
         """Bin every frame's exposure for ``b`` from the stored events and save the result."""

@@ -11,8 +11,9 @@ Only scoring and the ``oracle`` / ``white-box`` fits read it; bins, calibration,
                gain_per_s (response input = gain * radiance * exposure_s),
                depth_range_m (nearest and farthest depth in the mid-exposure training views),
                camera (JSON: the emulator settings that remake this recording),
-               sensor (JSON: the sensor's true values: DVS thresholds nominal and effective,
-               spread, cutoff, refractory, noise, latency; the response with its parameters)
+               sensor (JSON: the sensor's true values: the DVS pixel model as drawn, the
+               thresholds' median and harmonic mean over the pixels, latency and event delay,
+               the response with its parameters)
         /intrinsics          float64 (4,)            fx, fy, cx, cy (pixel centres at integers)
         /train/time_us       int64   (F, S)          sub-frame times of each training exposure
         /train/c2w           float64 (F, S, 4, 4)    true poses at those times (OpenCV axes)
@@ -24,6 +25,8 @@ Only scoring and the ``oracle`` / ``white-box`` fits read it; bins, calibration,
         /crf/value           float64 (K,)            LDR value in [0, 1]
         /path/time_us        int64   (N,)            every millisecond of the recording
         /path/c2w            float64 (N, 4, 4)       true poses then (see Truth.c2w_at)
+        /sensor/threshold_on float32 (H, W)          each DVS pixel's ON threshold
+        /sensor/threshold_off float32 (H, W)         and OFF threshold
     truth/test/hdr/{i:03d}.exr       float32 OpenEXR (RGB, or Y for monochrome)
     truth/test/ldr/x{factor}/{i:03d}.png   8-bit, factor in 1_16, 1_4, 1, 4, 16
 
@@ -66,6 +69,8 @@ _ARRAYS = {
     "crf_value": "crf/value",
     "path_time_us": "path/time_us",
     "path_c2w": "path/c2w",
+    "pixel_threshold_on": "sensor/threshold_on",
+    "pixel_threshold_off": "sensor/threshold_off",
 }
 _JSON_ATTRS = ("camera", "sensor")
 
@@ -94,6 +99,8 @@ class Truth:
     crf_value: np.ndarray
     path_time_us: np.ndarray
     path_c2w: np.ndarray
+    pixel_threshold_on: np.ndarray
+    pixel_threshold_off: np.ndarray
     camera: dict = field(default_factory=dict)
     sensor: dict = field(default_factory=dict)
 

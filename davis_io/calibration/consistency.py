@@ -1,0 +1,196 @@
+"""Frame/event consistency: thresholds, inverse response and pixel factors that explain both.
+
+Between consecutive exposure starts, a pixel's events give the change of its ln intensity;
+its two frames give, through the inverse response ``g`` and each exposure's blur term
+(:mod:`davis_io.calibration.pixel_events`), the same change. For every pixel pair of
+consecutive frames whose values are both usable:
+
+    ln g(v_(k+1)) - ln g(v_k) = theta_on N_on - theta_off N_off + ln M_(k+1) - ln M_k.
+
+A free ``g`` could absorb any common scale of the thresholds if the frames were sharp, but
+frames integrate *linear* intensity: a blurred edge mixes bright and dark in proportions the
+events time, and only the right contrast mixes them as the frame did. Pixels differ in their
+thresholds (a spread of several per cent multiplies every count of the ~tens of events between
+two frames), so each pixel gets ON and OFF factors of its own; the global thresholds are the
+median pixel's. The fit alternates:
+
+1. thresholds by Nelder-Mead on the disagreement in events (``g`` solved linearly inside);
+2. each pixel's factors by a few Gauss-Newton steps, shrunk towards 1;
+
+and profiles the latency (events moved earlier) on a grid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from davis_io.calibration.pixel_events import PixelEvents, log_blur
+from davis_io.calibration.response_fit import InverseResponse, hat_basis
+
+__all__ = ["ConsistencyProblem", "fit_pixel_factors", "fit_thresholds"]
+
+KNOTS = 16
+"""Knots of the free inverse response."""
+
+_SMOOTHNESS = 1e-3
+"""Weight of the curve's second differences against the data (per pair)."""
+
+_FACTOR_PRIOR = 4.0
+"""Shrinkage of a pixel's factors towards 1, in squared events (about 4 pairs' worth)."""
+
+_FACTOR_RANGE = (0.3, 3.0)
+
+
+@dataclass
+class ConsistencyProblem:
+    """The usable pairs of some pixels, ready for repeated evaluation.
+
+    Attributes:
+        events: the pixels' events.
+        values: ``(F, P)`` normalised frame values of the pixels.
+        usable: ``(F-1, P)`` both frames of the pair lie in the usable range.
+        knots: knots of the free inverse response.
+        factor_on: ``(P,)`` the pixels' ON factors (ones until fitted); ``factor_off`` OFF.
+        linear_black: None for a free response; else the black level of a linear one.
+    """
+
+    events: PixelEvents
+    values: np.ndarray
+    usable: np.ndarray
+    knots: np.ndarray
+    factor_on: np.ndarray
+    factor_off: np.ndarray
+    linear_black: float | None = None
+
+    def __post_init__(self) -> None:
+        self._frame, self._pixel = np.nonzero(self.usable)
+        after = hat_basis(self.values[self._frame + 1, self._pixel], self.knots)
+        before = hat_basis(self.values[self._frame, self._pixel], self.knots)
+        self._design = (after - before)[:, 1:]
+        second = np.diff(np.eye(len(self.knots)), 2, axis=0)[:, 1:]
+        normal = self._design.T @ self._design
+        normal += _SMOOTHNESS * len(self._design) * second.T @ second / len(self.knots)
+        self._normal = normal
+
+    @property
+    def pairs(self) -> int:
+        """Number of usable pairs."""
+        return len(self._frame)
+
+    def event_change(self, theta_on: float, theta_off: float) -> tuple[np.ndarray, np.ndarray]:
+        """The change the events give for each usable pair, and the blur term ``ln M`` (F, P)."""
+        on, off = theta_on * self.factor_on, theta_off * self.factor_off
+        blur = log_blur(self.events, on, off).value
+        frame, pixel = self._frame, self._pixel
+        change = on[pixel] * self.events.between_on[frame, pixel]
+        change -= off[pixel] * self.events.between_off[frame, pixel]
+        change += blur[frame + 1, pixel] - blur[frame, pixel]
+        return change, blur
+
+    def solve(self, theta_on: float, theta_off: float) -> tuple[np.ndarray, InverseResponse]:
+        """Residuals (ln units) of each usable pair and the inverse response that fits best."""
+        change, _ = self.event_change(theta_on, theta_off)
+        if self.linear_black is not None:
+            response = InverseResponse(self.knots, self._linear_log_exposure())
+        else:
+            coefficients = np.linalg.solve(self._normal, self._design.T @ change)
+            response = InverseResponse(self.knots, np.concatenate([[0.0], coefficients]))
+        frame, pixel = self._frame, self._pixel
+        frame_change = response(self.values[frame + 1, pixel]) - response(self.values[frame, pixel])
+        return frame_change - change, response
+
+    def _linear_log_exposure(self) -> np.ndarray:
+        """``ln(v - black)`` at the knots, 0 at the first."""
+        log_g = np.log(np.maximum(self.knots - self.linear_black, 1e-9))
+        return log_g - log_g[0]
+
+    def disagreement(self, theta_on: float, theta_off: float) -> float:
+        """Mean squared residual in events (residual over the mean threshold)."""
+        if min(theta_on, theta_off) <= 0.01:
+            return float("inf")
+        residual, _ = self.solve(theta_on, theta_off)
+        return float(np.mean(residual**2)) / (0.5 * (theta_on + theta_off)) ** 2
+
+
+def fit_thresholds(
+    problem: ConsistencyProblem, start: tuple[float, float]
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """ON and OFF thresholds that minimise the disagreement, from ``start``.
+
+    Returns:
+        The thresholds ``(2,)``, the disagreement there (events squared) and the standard
+        uncertainties ``(2,)`` from the curvature of the disagreement (a lower bound: it
+        counts the pairs as independent).
+    """
+    found = minimize(
+        lambda theta: problem.disagreement(*theta),
+        np.asarray(start, np.float64),
+        method="Nelder-Mead",
+        options={"xatol": 2e-4, "fatol": 1e-9, "maxiter": 200},
+    )
+    theta, best = found.x, float(found.fun)
+    step = 0.02 * theta
+    curvature = np.empty(2)
+    for axis in range(2):
+        shift = np.zeros(2)
+        shift[axis] = step[axis]
+        up = problem.disagreement(*(theta + shift))
+        down = problem.disagreement(*(theta - shift))
+        curvature[axis] = max((up + down - 2 * best) / step[axis] ** 2, 1e-12)
+    # Mean of Q squared residuals of variance `best`: its curvature c gives var = 2 best / (Q c).
+    sd = np.sqrt(2 * best / (max(problem.pairs, 1) * curvature))
+    return theta, best, sd
+
+
+def fit_pixel_factors(
+    problem: ConsistencyProblem,
+    theta: np.ndarray,
+    response: Callable[[np.ndarray], np.ndarray],
+    steps: int = 4,
+) -> np.ndarray:
+    """Fit each pixel's ON and OFF factors in place (Gauss-Newton, shrunk towards 1).
+
+    Each pixel's pairs give its own least-squares problem in two unknowns. The factors of the
+    pixels with at least three usable pairs are then divided by their median, the others set to
+    1, so the thresholds times that median stay the median pixel's.
+
+    Returns:
+        The thresholds ``(2,)`` multiplied by the factors' medians.
+    """
+    events, weight = problem.events, problem.usable.astype(np.float64)
+    frame_change = np.diff(response(problem.values).reshape(problem.values.shape), axis=0)
+    low, high = _FACTOR_RANGE
+    for _ in range(steps):
+        on, off = theta[0] * problem.factor_on, theta[1] * problem.factor_off
+        blur = log_blur(events, on, off)
+        change = on * events.between_on - off * events.between_off + np.diff(blur.value, axis=0)
+        residual = frame_change - change
+        grad_on = -(events.between_on + np.diff(blur.d_on, axis=0)) * theta[0]
+        grad_off = (events.between_off - np.diff(blur.d_off, axis=0)) * theta[1]
+        a11 = (weight * grad_on**2).sum(0) + _FACTOR_PRIOR
+        a22 = (weight * grad_off**2).sum(0) + _FACTOR_PRIOR
+        a12 = (weight * grad_on * grad_off).sum(0)
+        b1 = -(weight * grad_on * residual).sum(0) - _FACTOR_PRIOR * (problem.factor_on - 1)
+        b2 = -(weight * grad_off * residual).sum(0) - _FACTOR_PRIOR * (problem.factor_off - 1)
+        determinant = a11 * a22 - a12**2
+        problem.factor_on = np.clip(
+            problem.factor_on + (a22 * b1 - a12 * b2) / determinant, low, high
+        )
+        problem.factor_off = np.clip(
+            problem.factor_off + (a11 * b2 - a12 * b1) / determinant, low, high
+        )
+    measured = weight.sum(axis=0) >= 3
+    if not measured.any():
+        problem.factor_on[:] = problem.factor_off[:] = 1.0
+        return np.asarray(theta, np.float64)
+    means = []
+    for factors in (problem.factor_on, problem.factor_off):
+        mean = float(np.median(factors[measured]))
+        factors /= mean
+        factors[~measured] = 1.0
+        means.append(mean)
+    return np.asarray(theta, np.float64) * np.asarray(means)

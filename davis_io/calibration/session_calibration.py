@@ -1,0 +1,65 @@
+"""Calibrating a recorded session: read its frames and events, measure, store ``/calibration``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from davis_io.calibration.estimate import LATENCIES_US, CalibrationInput, Progress, calibrate_frames
+from davis_io.session import Session
+from davis_io.session.calibration import SensorCalibration
+
+__all__ = ["calibrate_session", "session_calibration"]
+
+
+def _recording(session: Session) -> CalibrationInput:
+    table = session.frames_table()
+    usable = np.flatnonzero(~np.asarray(table.events_lost, bool))
+    frames = [session.frame(int(i)) for i in usable]
+    top = float(2 ** frames[0].bit_depth - 1) if frames else 1.0
+    start, end = table.exposure_start_us[usable], table.exposure_end_us[usable]
+    events = (
+        session.events_between(int(start[0]), int(end[-1]) + max(LATENCIES_US))
+        if len(usable)
+        else np.zeros(0, [("t", "i8"), ("x", "u2"), ("y", "u2"), ("p", "i1")])
+    )
+    return CalibrationInput(
+        frames=np.stack([f.image for f in frames]).astype(np.float64) / top
+        if frames
+        else np.zeros((0, session.height, session.width)),
+        adc_step=1.0 / top,
+        times_us=np.ascontiguousarray(events["t"]),
+        x=np.ascontiguousarray(events["x"]),
+        y=np.ascontiguousarray(events["y"]),
+        is_on=events["p"] > 0,
+        exposure_start_us=start,
+        exposure_end_us=end,
+    )
+
+
+def calibrate_session(
+    session: Session | Path | str, *, force: bool = False, progress: Progress | None = None
+) -> SensorCalibration:
+    """Measure the sensor of a session and store it; a stored calibration is reused.
+
+    Frames whose exposure lost events are left out.
+
+    Raises:
+        UsageError: too few usable frames or pixels to measure anything.
+        SessionError: the session cannot be read or written.
+    """
+    if not isinstance(session, Session):
+        with Session.open(session) as opened:
+            return calibrate_session(opened, force=force, progress=progress)
+    stored = session.calibration()
+    if stored is not None and not force:
+        return stored
+    calibration = calibrate_frames(_recording(session), progress=progress)
+    session.write_calibration(calibration)
+    return calibration
+
+
+def session_calibration(session: Session, progress: Progress | None = None) -> SensorCalibration:
+    """The stored calibration, measured first when there is none."""
+    return session.calibration() or calibrate_session(session, progress=progress)
