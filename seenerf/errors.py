@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from davis_io.errors import DavisIOError
+from davis_io import SeecapError
 
 __all__ = ["CheckpointError", "ConfigError", "SeeNerfError", "TrainingDataError"]
 
 
-class SeeNerfError(DavisIOError):
+class SeeNerfError(SeecapError):
     """Base of every error raised on purpose by ``seenerf`` (caught by the ``seecap`` CLI)."""
 
 

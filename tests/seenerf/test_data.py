@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from davis_io import SeecapError
 from davis_io.errors import DavisIOError
 from davis_io.types import ColorFilter
 from seenerf.data import pixel_layout
@@ -42,7 +43,8 @@ def test_validate_ranges(field, value, message):
 
 
 def test_errors_are_caught_by_the_cli():
-    assert issubclass(SeeNerfError, DavisIOError)
+    assert issubclass(SeeNerfError, SeecapError) and issubclass(DavisIOError, SeecapError)
+    assert not issubclass(SeeNerfError, DavisIOError)
 
 
 def test_synthetic_scene_ideal_events_match_the_latent_radiance():
