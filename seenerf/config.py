@@ -7,6 +7,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from davis_io.session import DEFAULT_THRESHOLD
 from seenerf.errors import ConfigError
 from seenerf.presets import PRESETS
 from seenerf.variants import LOW_PASS_READINGS, VARIANTS
@@ -59,7 +60,7 @@ class FitConfig:
     anchor_weight: float = 0.5
     anchor_log_exposure: float = 0.0
     anchor_value: float = 0.5
-    threshold: float = 0.3
+    threshold: float = DEFAULT_THRESHOLD
     cutoff_hz: float = 150.0
     event_share: float = 0.5
     validation_share: float = 0.01

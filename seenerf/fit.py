@@ -9,7 +9,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from davis_io.session import Session
+from davis_io.session import DEFAULT_BINS, Session
 from seenerf.config import FitConfig, save_config
 from seenerf.data import TrainingData
 from seenerf.errors import TrainingDataError
@@ -31,9 +31,6 @@ from seenerf.trainer import Trainer, TrainSummary
 from seenerf.views import IDENTITY
 
 __all__ = ["FitResult", "ensure_poses", "fit_data", "fit_session", "render_outputs"]
-
-DEFAULT_BINS = 4
-"""b when neither the config nor the session manifest names one (the paper's value)."""
 
 
 @dataclass

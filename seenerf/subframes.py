@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from davis_io.bins import subdivide, trapezoid_weights
 from davis_io.geometry import interpolate_poses
+from davis_io.session import subdivide, trapezoid_weights
 from seenerf.data import TrainingData
 
 __all__ = [

@@ -24,6 +24,7 @@ from pathlib import Path
 import torch
 
 from davis_io.poses.truth import store_true_poses
+from davis_io.session import DEFAULT_BINS
 from seenerf.config import FitConfig
 from seenerf.fit import ensure_poses, fit_data
 from seenerf.session_data import load_training_data
@@ -172,7 +173,7 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=Path("bench-sessions"))
     parser.add_argument("--frames", type=int, default=20)
     parser.add_argument("--exposure", default="0.15")
-    parser.add_argument("--bins", type=int, default=4)
+    parser.add_argument("--bins", type=int, default=DEFAULT_BINS)
     parser.add_argument("--preset", default="fast")
     parser.add_argument("--variants", default="full,no-events,base,oracle")
     parser.add_argument("--budget", type=float, default=600.0, help="seconds per variant")

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from davis_io.errors import UsageError
-from davis_io.units import parse_duration_us
+from davis_io.session import parse_duration_us
 
 __all__ = ["HELP", "add_arguments", "parse_budget_s", "run"]
 
