@@ -27,7 +27,6 @@ VERBS: dict[str, str] = {
     "fit": "seenerf.cli.fit_verb",
     "render": "seenerf.cli.render_verb",
     "eval": "seenerf.cli.eval_verb",
-    "bench": "seenerf.cli.bench_verb",
 }
 """Every verb of ``seecap``, in the order ``--help`` lists them."""
 
