@@ -25,11 +25,11 @@ import torch
 
 from davis_io.poses.truth import store_true_poses
 from davis_io.session import DEFAULT_BINS
-from seenerf.config import FitConfig
-from seenerf.fit import ensure_poses, fit_data
-from seenerf.session_data import load_training_data
-from seenerf.synthetic import plane_scene
-from seenerf.trainer import Trainer
+from seenerf.data.session import load_training_data
+from seenerf.data.synthetic import plane_scene
+from seenerf.model.config import FitConfig
+from seenerf.train.fit import ensure_poses, fit_data
+from seenerf.train.trainer import Trainer
 
 
 def machine() -> str:

@@ -22,7 +22,7 @@ import numpy as np
 from davis_io.bins import subdivide, trapezoid_weights
 from davis_io.emulator import EmulatedCamera
 from davis_io.session import DEFAULT_BINS, Session
-from seenerf.evaluate import psnr
+from seenerf.eval.metrics import psnr
 
 ADC_TOP = 1023.0
 """Largest 10-bit ADC value: frames are compared scaled to [0, 1]."""

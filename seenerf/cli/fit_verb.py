@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from davis_io.errors import UsageError
 from davis_io.session import parse_duration_us
+from seenerf.errors import ConfigError
 
 __all__ = ["HELP", "add_arguments", "parse_budget_s", "run"]
 
@@ -82,11 +82,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Fit, print the scores; return 0."""
-    from seenerf.config import FitConfig
-    from seenerf.fit import fit_session
+    from seenerf.eval.scores import format_scores
+    from seenerf.model.config import FitConfig
+    from seenerf.train.fit import fit_session
 
     if args.steps < 0:
-        raise UsageError("--steps must be >= 0")
+        raise ConfigError("--steps must be >= 0")
     config = FitConfig(
         preset=args.preset,
         variant=args.variant,
@@ -105,48 +106,3 @@ def run(args: argparse.Namespace) -> int:
     print(f"run: {result.run_dir}")
     print(format_scores(result.metrics))
     return 0
-
-
-def format_scores(metrics: dict) -> str:
-    """One line per score of a ``metrics.json`` payload (the shared printout of fit and eval)."""
-    lines = []
-    if "hdr" in metrics:
-        lines.append(
-            f"HDR (tone-mapped, scale-aligned): PSNR {metrics['hdr']['psnr']:.2f} dB  "
-            f"SSIM {metrics['hdr']['ssim']:.4f}"
-        )
-        lines.append(
-            f"HDR (tone-mapped, unaligned):     PSNR {metrics['hdr_unaligned']['psnr']:.2f} dB"
-        )
-        novel = metrics["novel_exposure"]
-        lines.append(
-            f"novel exposures (2nd, 4th):       PSNR {novel['psnr']:.2f} dB  "
-            f"SSIM {novel['ssim']:.4f}"
-        )
-        for exposure, score in metrics.get("ldr", {}).items():
-            lpips = f"  LPIPS {score['lpips']:.4f}" if "lpips" in score else ""
-            lines.append(
-                f"  LDR {exposure:>8} s: PSNR {score['psnr']:.2f} dB  SSIM {score['ssim']:.4f}"
-                + lpips
-            )
-        if "lpips" in metrics:
-            lines.append(metrics["lpips"])
-        if "residual_blur" in metrics:
-            blur = metrics["residual_blur"]
-            lines.append(
-                f"sharpness: the middle exposure's views match the truth blurred by "
-                f"{blur['sigma_px']:.3g} px (Gaussian sigma; {blur['psnr_gain']:+.2f} dB against "
-                "the unblurred truth)"
-            )
-        poses = metrics.get("test_poses", {})
-        if poses.get("registered"):
-            mapped = poses["at_mapped_poses"]
-            lines.append(
-                f"held-out poses registered to the model (turned {poses['turned_deg_median']:.2f} "
-                f"deg median); at the mapped poses: HDR {mapped['hdr_psnr']:.2f} dB, "
-                f"novel {mapped['novel_exposure_psnr']:.2f} dB"
-            )
-    else:
-        lines.append("no ground truth: renders written, nothing scored")
-    lines.append(f"render: {metrics.get('render_s_per_view', float('nan')):.2f} s per view")
-    return "\n".join(lines)

@@ -4,9 +4,9 @@ import pytest
 from davis_io import SeecapError
 from davis_io.errors import DavisIOError
 from davis_io.types import ColorFilter
-from seenerf.data import pixel_layout
+from seenerf.data.arrays import pixel_layout
+from seenerf.data.synthetic import plane_scene
 from seenerf.errors import SeeNerfError, TrainingDataError
-from seenerf.synthetic import plane_scene
 
 
 def test_rggb_layout_picks_one_channel_per_site():

@@ -50,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
 
         store_true_poses(args.session, args.bins)
     else:
-        from seenerf.fit import ensure_poses
+        from seenerf.train.fit import ensure_poses
 
         ensure_poses(args.session, args.bins, print)
     print(f"poses ({args.source}, b={args.bins}): {time.perf_counter() - start:.1f} s")

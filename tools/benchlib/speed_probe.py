@@ -28,7 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     from bench_fit import speed_table
 
-    from seenerf.session_data import load_training_data
+    from seenerf.data.session import load_training_data
 
     table = speed_table(load_training_data(args.session, args.bins), steps=args.steps)
     print(json.dumps({"rays_per_s": table}))

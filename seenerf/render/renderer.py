@@ -9,10 +9,15 @@ import torch
 from torch import nn
 
 from seenerf.fields import FIELDS
-from seenerf.frustum import FrustumSpace
-from seenerf.rays import SceneBox, intersect_box
-from seenerf.render import composite, sample_weights
-from seenerf.sampling import OccupancyGrid, PackedSamples, importance_samples, stratified_samples
+from seenerf.render.frustum import FrustumSpace
+from seenerf.render.rays import SceneBox, intersect_box
+from seenerf.render.sampling import (
+    OccupancyGrid,
+    PackedSamples,
+    importance_samples,
+    stratified_samples,
+)
+from seenerf.render.volume import composite, sample_weights
 
 __all__ = ["WEIGHT_CUTOFF", "RadianceRenderer", "RenderedRays", "SamplerSpec"]
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from seenerf.errors import ConfigError
-from seenerf.radiance import SamplerSpec
+from seenerf.render.renderer import SamplerSpec
 
 __all__ = ["PRESETS", "Preset", "get_preset", "size_field"]
 
@@ -33,8 +33,8 @@ class Preset:
         patience: evaluations without improvement before an early stop (0 = never).
         max_resolution: cap of the resized field resolution.
         warm_steps: CRF warm-start steps (reference 500).
-        space: ``auto`` (a forward-facing scene in NDC, :mod:`seenerf.frustum`; any other in a
-            world box) or ``world`` (always a world box, as published).
+        space: ``auto`` (a forward-facing scene in NDC, :mod:`seenerf.render.frustum`; any other
+            in a world box) or ``world`` (always a world box, as published).
     """
 
     description: str

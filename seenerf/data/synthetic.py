@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from davis_io.session import DEFAULT_BINS, ColorFilter
-from seenerf.data import TestViews, TrainingData, TrainTruth, pixel_layout
+from seenerf.data.arrays import TestViews, TrainingData, TrainTruth, pixel_layout
 
 __all__ = ["PLANE_DEPTH", "plane_radiance", "plane_scene", "true_response"]
 

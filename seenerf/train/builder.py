@@ -7,16 +7,16 @@ import dataclasses
 import numpy as np
 import torch
 
-from seenerf.config import FitConfig
-from seenerf.data import TrainingData
+from seenerf.data.arrays import TrainingData
+from seenerf.data.frames import truth_to_fit_frame
 from seenerf.errors import ConfigError
-from seenerf.frustum import forward_facing_space, frustum_box
-from seenerf.model import SeeNerfModel
-from seenerf.presets import Preset, get_preset, size_field
-from seenerf.radiance import RadianceRenderer
-from seenerf.rays import in_any_view, scene_box_from_cameras
-from seenerf.variants import LOW_PASS_READINGS, get_variant
-from seenerf.views import truth_to_fit_frame
+from seenerf.model.config import FitConfig
+from seenerf.model.model import SeeNerfModel
+from seenerf.model.presets import Preset, get_preset, size_field
+from seenerf.model.variants import LOW_PASS_READINGS, get_variant
+from seenerf.render.frustum import forward_facing_space, frustum_box
+from seenerf.render.rays import in_any_view, scene_box_from_cameras
+from seenerf.render.renderer import RadianceRenderer
 
 __all__ = ["build_model", "resolve_device", "training_frame"]
 

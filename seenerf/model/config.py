@@ -9,8 +9,8 @@ from pathlib import Path
 
 from davis_io.session import DEFAULT_THRESHOLD
 from seenerf.errors import ConfigError
-from seenerf.presets import PRESETS
-from seenerf.variants import LOW_PASS_READINGS, VARIANTS
+from seenerf.model.presets import PRESETS
+from seenerf.model.variants import LOW_PASS_READINGS, VARIANTS
 
 __all__ = ["FitConfig", "load_config", "save_config"]
 
@@ -44,7 +44,7 @@ class FitConfig:
         warm_steps: CRF warm-start steps (-1: the preset's, the reference's 500).
         register_test_views: before scoring a fit made from estimated poses, refine each
             held-out pose against its image (scores at the unrefined poses are kept too).
-        subframes: poses per event bin in the exposure integral (:mod:`seenerf.subframes`);
+        subframes: poses per event bin in the exposure integral (:mod:`seenerf.data.subframes`);
             1 is the published b+1 latent poses.
     """
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from davis_io.geometry import interpolate_poses
 from davis_io.session import subdivide, trapezoid_weights
-from seenerf.data import TrainingData
+from seenerf.data.arrays import TrainingData
 
 __all__ = [
     "latent_fractions",

@@ -8,11 +8,11 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from seenerf.radiance import RadianceRenderer
+from seenerf.model.variants import Variant
+from seenerf.render.renderer import RadianceRenderer
 from seenerf.sensors.event_crf import EventCrf, EventModelSpec
 from seenerf.sensors.exposure import blur_log_radiance
 from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf, interpolate_response
-from seenerf.variants import Variant
 
 __all__ = ["CRFS", "IMAGING", "RESPONSE_TABLE_SIZE", "Prediction", "RayBatch", "SeeNerfModel"]
 
