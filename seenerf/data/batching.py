@@ -7,7 +7,7 @@ import torch
 
 from seenerf.data.arrays import TrainingData
 from seenerf.data.subframes import refine_exposure
-from seenerf.model.model import RayBatch
+from seenerf.model.imaging import RayBatch
 from seenerf.render.rays import camera_rays
 
 __all__ = ["FrameSampler", "OracleSampler"]

@@ -20,8 +20,7 @@ def render_outputs(
     model: SeeNerfModel, data: TrainingData, config: FitConfig, run_dir: Path
 ) -> dict:
     """Render the held-out (or training) views, write every output file, return the scores."""
-    oracle = model.variant.supervision == "sharp-hdr"
-    poses, similarity = test_poses_in_fit_frame(data, oracle)
+    poses, similarity = test_poses_in_fit_frame(data, model.variant.supervision.truth_hdr)
     exposures = config.exposures_s or (
         tuple(float(e) for e in data.test.exposures_s)
         if data.test is not None

@@ -4,10 +4,48 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from seenerf.errors import ConfigError
-from seenerf.sensors.event_crf import EventModelSpec
+from torch import nn
 
-__all__ = ["LOW_PASS_READINGS", "VARIANTS", "Variant", "get_variant"]
+from seenerf.errors import ConfigError
+from seenerf.model.imaging import LDR_FIELD, PIXEL, POINT, Imaging
+from seenerf.sensors.event_crf import EventModelSpec
+from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf
+
+__all__ = [
+    "BLURRY",
+    "LOW_PASS_READINGS",
+    "MULTI_EXPOSURE",
+    "SHARP_HDR",
+    "VARIANTS",
+    "Supervision",
+    "Variant",
+    "get_variant",
+]
+
+
+@dataclass(frozen=True)
+class Supervision:
+    """What training compares the model with.
+
+    Attributes:
+        truth_hdr: the truth's sharp linear HDR at the truth's poses (the oracle): the field is
+            trained in the truth's frame, on batches of the truth's images, by the HDR loss;
+            otherwise on the recorded frames at the estimated poses.
+        several_exposures: the frames must have at least two exposures.
+    """
+
+    truth_hdr: bool = False
+    several_exposures: bool = False
+
+
+BLURRY = Supervision()
+"""The recorded blurry frames (and their events)."""
+
+MULTI_EXPOSURE = Supervision(several_exposures=True)
+"""Recorded frames of several exposures."""
+
+SHARP_HDR = Supervision(truth_hdr=True)
+"""The truth's sharp HDR at the true poses: the oracle."""
 
 
 @dataclass(frozen=True)
@@ -16,21 +54,24 @@ class Variant:
 
     Attributes:
         description: one line for ``--help`` and reports.
-        imaging: ``pixel`` (blur in linear HDR, then the RGB CRF per pixel: the paper),
-            ``point`` (CRF on every 3-D sample, blur in LDR: HDR-NeRF style) or ``ldr-field``
-            (the field renders LDR directly, blur in LDR, no CRF).
-        crf: ``mlp`` (three per-channel MLPs), ``power`` (x^a), ``true`` (the truth's table,
-            the oracle) or ``none``.
+        imaging: how rendered values become pixels (:mod:`seenerf.model.imaging`):
+            :data:`~seenerf.model.imaging.PIXEL` (blur in linear HDR, then the RGB CRF per
+            pixel: the paper), :data:`~seenerf.model.imaging.POINT` (CRF on every 3-D sample,
+            blur in LDR: HDR-NeRF style) or :data:`~seenerf.model.imaging.LDR_FIELD` (the field
+            renders LDR directly, blur in LDR, no CRF).
+        crf: the RGB response class: ``RgbCrf`` (three per-channel MLPs), ``PowerCrf`` (x^a),
+            ``TabulatedCrf`` (the truth's table, the oracle) or None.
         events: the event model, or None for no event loss.
-        supervision: ``blurry`` (recorded frames), ``multi-exposure`` (frames of several
-            exposures, no events) or ``sharp-hdr`` (truth sharp HDR at true poses: the oracle).
+        supervision: :data:`BLURRY` (recorded frames), :data:`MULTI_EXPOSURE` (frames of several
+            exposures, no events) or :data:`SHARP_HDR` (truth sharp HDR at true poses: the
+            oracle).
     """
 
     description: str
-    imaging: str = "pixel"
-    crf: str = "mlp"
+    imaging: Imaging = PIXEL
+    crf: type[nn.Module] | None = RgbCrf
     events: EventModelSpec | None = field(default_factory=EventModelSpec)
-    supervision: str = "blurry"
+    supervision: Supervision = BLURRY
 
 
 VARIANTS: dict[str, Variant] = {
@@ -52,22 +93,20 @@ VARIANTS: dict[str, Variant] = {
         "explicit Deblur-e fourth-order low-pass with the fixed intensity factor",
         events=EventModelSpec(delay="v2e", order=4),
     ),
-    "power-crf": Variant("EvHDR-GS power-function CRF x^a for all channels", crf="power"),
-    "point-crf-3d": Variant("HDR-NeRF style CRF on 3-D samples, blur in LDR", imaging="point"),
-    "base": Variant(
-        "naive LDR field: no CRF, no events", imaging="ldr-field", crf="none", events=None
-    ),
+    "power-crf": Variant("EvHDR-GS power-function CRF x^a for all channels", crf=PowerCrf),
+    "point-crf-3d": Variant("HDR-NeRF style CRF on 3-D samples, blur in LDR", imaging=POINT),
+    "base": Variant("naive LDR field: no CRF, no events", imaging=LDR_FIELD, crf=None, events=None),
     "multi-exposure": Variant(
         "HDR-NeRF reference setting: frames at several exposures, no events",
         events=None,
-        supervision="multi-exposure",
+        supervision=MULTI_EXPOSURE,
     ),
     "oracle": Variant(
         "upper bound: the same field trained on truth sharp linear HDR at true poses, "
         "LDR views through the true response",
-        crf="true",
+        crf=TabulatedCrf,
         events=None,
-        supervision="sharp-hdr",
+        supervision=SHARP_HDR,
     ),
 }
 """Every variant by name; ``full`` is the paper's method."""

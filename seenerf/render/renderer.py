@@ -19,7 +19,7 @@ from seenerf.render.sampling import (
 )
 from seenerf.render.volume import composite, sample_weights
 
-__all__ = ["WEIGHT_CUTOFF", "RadianceRenderer", "RenderedRays", "SamplerSpec"]
+__all__ = ["WEIGHT_CUTOFF", "RadianceRenderer", "RenderedRays", "SamplerSpec", "ValueFn"]
 
 WEIGHT_CUTOFF = 1e-4
 """Samples whose blending weight is below this get no radiance query (their share is dropped)."""

@@ -127,7 +127,7 @@ class Trainer:
             self.config.subframes,
         )
         self.oracle = None
-        if self.model.variant.supervision == "sharp-hdr":
+        if self.model.variant.supervision.truth_hdr:
             truth = data.truth
             self.oracle = OracleSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, self.device)
 
