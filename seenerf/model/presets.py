@@ -7,9 +7,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from seenerf.errors import ConfigError
-from seenerf.render.renderer import SamplerSpec
+from seenerf.render.sampler_spec import SamplerSpec
 
-__all__ = ["PRESETS", "Preset", "get_preset", "size_field"]
+__all__ = ["DEFAULT_PRESET", "PRESETS", "Preset", "get_preset", "size_field"]
 
 
 @dataclass(frozen=True)
@@ -75,7 +75,7 @@ FAST = Preset(
     grid_every=50,
     patience=8,
 )
-"""The default preset of ``seecap fit``."""
+"""CPU-first settings, the default preset (:data:`DEFAULT_PRESET`)."""
 
 
 PRESETS: dict[str, Preset] = {
@@ -101,7 +101,10 @@ PRESETS: dict[str, Preset] = {
         patience=12,
     ),
 }
-"""Every preset by name; ``fast`` is the default of ``seecap fit``."""
+"""Every preset by name; :data:`DEFAULT_PRESET` is the default of ``seecap fit``."""
+
+DEFAULT_PRESET = "fast"
+"""The preset of a fit that names none."""
 
 
 def get_preset(name: str) -> Preset:
