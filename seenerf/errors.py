@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TypeVar
+
 from davis_io import SeecapError
 
-__all__ = ["CheckpointError", "ConfigError", "SeeNerfError", "TrainingDataError"]
+__all__ = ["CheckpointError", "ConfigError", "SeeNerfError", "TrainingDataError", "by_name"]
+
+T = TypeVar("T")
 
 
 class SeeNerfError(SeecapError):
@@ -21,3 +26,14 @@ class TrainingDataError(SeeNerfError):
 
 class CheckpointError(SeeNerfError):
     """A run folder or checkpoint is missing or does not match its configuration."""
+
+
+def by_name(table: Mapping[str, T], what: str, name: str) -> T:
+    """The entry of ``table`` called ``name`` (a preset, a variant).
+
+    Raises:
+        ConfigError: unknown name (the message lists the known ones).
+    """
+    if name not in table:
+        raise ConfigError(f"unknown {what} {name!r}; choose one of: {', '.join(table)}")
+    return table[name]

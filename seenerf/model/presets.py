@@ -6,7 +6,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from seenerf.errors import ConfigError
+from seenerf.errors import by_name
 from seenerf.render.sampler_spec import SamplerSpec
 
 __all__ = ["DEFAULT_PRESET", "PRESETS", "Preset", "get_preset", "size_field"]
@@ -113,9 +113,7 @@ def get_preset(name: str) -> Preset:
     Raises:
         ConfigError: unknown name (the message lists the known ones).
     """
-    if name not in PRESETS:
-        raise ConfigError(f"unknown preset {name!r}; choose one of: {', '.join(PRESETS)}")
-    return PRESETS[name]
+    return by_name(PRESETS, "preset", name)
 
 
 def size_field(preset: Preset, span_px: float) -> Preset:

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 from torch import nn
 
-from seenerf.errors import ConfigError
+from seenerf.errors import by_name
 from seenerf.model.imaging import LDR_FIELD, PIXEL, POINT, Imaging
 from seenerf.sensors.event_crf import EventModelSpec
 from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf
@@ -125,6 +125,4 @@ def get_variant(name: str) -> Variant:
     Raises:
         ConfigError: unknown name (the message lists the known ones).
     """
-    if name not in VARIANTS:
-        raise ConfigError(f"unknown variant {name!r}; choose one of: {', '.join(VARIANTS)}")
-    return VARIANTS[name]
+    return by_name(VARIANTS, "variant", name)
