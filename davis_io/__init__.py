@@ -3,6 +3,8 @@
 This package never imports torch.
 """
 
+from davis_io.errors import SeecapError
+
 __version__ = "0.1.0"
 
-__all__ = ["__version__"]
+__all__ = ["SeecapError", "__version__"]

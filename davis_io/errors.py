@@ -6,12 +6,17 @@ __all__ = [
     "DavisIOError",
     "DeviceError",
     "FormatError",
+    "SeecapError",
     "SessionError",
     "UsageError",
 ]
 
 
-class DavisIOError(Exception):
+class SeecapError(Exception):
+    """Base of every error raised on purpose by seecap (caught by the ``seecap`` CLI)."""
+
+
+class DavisIOError(SeecapError):
     """Base of every error raised on purpose by ``davis_io``."""
 
 

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
-from davis_io.errors import DavisIOError
+from collections.abc import Mapping
+from typing import TypeVar
 
-__all__ = ["CheckpointError", "ConfigError", "SeeNerfError", "TrainingDataError"]
+from davis_io import SeecapError
+
+__all__ = ["CheckpointError", "ConfigError", "SeeNerfError", "TrainingDataError", "by_name"]
+
+T = TypeVar("T")
 
 
-class SeeNerfError(DavisIOError):
+class SeeNerfError(SeecapError):
     """Base of every error raised on purpose by ``seenerf`` (caught by the ``seecap`` CLI)."""
 
 
@@ -21,3 +26,14 @@ class TrainingDataError(SeeNerfError):
 
 class CheckpointError(SeeNerfError):
     """A run folder or checkpoint is missing or does not match its configuration."""
+
+
+def by_name(table: Mapping[str, T], what: str, name: str) -> T:
+    """The entry of ``table`` called ``name`` (a preset, a variant).
+
+    Raises:
+        ConfigError: unknown name (the message lists the known ones).
+    """
+    if name not in table:
+        raise ConfigError(f"unknown {what} {name!r}; choose one of: {', '.join(table)}")
+    return table[name]

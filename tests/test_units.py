@@ -1,7 +1,7 @@
 import pytest
 
 from davis_io.errors import UsageError
-from davis_io.units import parse_duration_us
+from davis_io.session.units import parse_duration_us
 
 
 @pytest.mark.parametrize(

@@ -47,8 +47,8 @@ from benchlib.report import BenchReport, render_markdown, write_json
 from benchlib.results import RunRow
 from benchlib.sessions import prepare_session
 
-from seenerf.presets import PRESETS
-from seenerf.variants import VARIANTS
+from seenerf.model.presets import PRESETS
+from seenerf.model.variants import VARIANTS
 
 TOOLS_DIR = Path(__file__).resolve().parent
 

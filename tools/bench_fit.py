@@ -24,11 +24,13 @@ from pathlib import Path
 import torch
 
 from davis_io.poses.truth import store_true_poses
-from seenerf.config import FitConfig
-from seenerf.fit import ensure_poses, fit_data
-from seenerf.session_data import load_training_data
-from seenerf.synthetic import plane_scene
-from seenerf.trainer import Trainer
+from davis_io.session import DEFAULT_BINS
+from seenerf.data.session import load_training_data
+from seenerf.data.synthetic import plane_scene
+from seenerf.model.config import FitConfig
+from seenerf.model.presets import DEFAULT_PRESET
+from seenerf.train.fit import ensure_poses, fit_data
+from seenerf.train.trainer import Trainer
 
 
 def machine() -> str:
@@ -172,8 +174,8 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=Path("bench-sessions"))
     parser.add_argument("--frames", type=int, default=20)
     parser.add_argument("--exposure", default="0.15")
-    parser.add_argument("--bins", type=int, default=4)
-    parser.add_argument("--preset", default="fast")
+    parser.add_argument("--bins", type=int, default=DEFAULT_BINS)
+    parser.add_argument("--preset", default=DEFAULT_PRESET)
     parser.add_argument("--variants", default="full,no-events,base,oracle")
     parser.add_argument("--budget", type=float, default=600.0, help="seconds per variant")
     parser.add_argument(

@@ -25,7 +25,7 @@ import numpy as np
 from davis_io.emulator import EmulatedCamera
 from davis_io.poses import estimate_poses
 from davis_io.poses.truth import compare_with_truth
-from davis_io.session import Session
+from davis_io.session import DEFAULT_BINS, Session
 from davis_io.session.recorder import record
 from davis_io.session.truth import load_truth, save_truth
 
@@ -36,7 +36,7 @@ def run(
     quick: bool,
     *,
     views: int = 16,
-    bins: int = 4,
+    bins: int = DEFAULT_BINS,
     out: Path | None = None,
     unknown_intrinsics: bool = False,
 ) -> dict:
@@ -111,7 +111,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="6 views instead of 16")
     parser.add_argument("--views", type=int, default=16)
-    parser.add_argument("--bins", type=int, default=4)
+    parser.add_argument("--bins", type=int, default=DEFAULT_BINS)
     parser.add_argument("--out", type=Path, help="keep the session here (default: temporary)")
     parser.add_argument(
         "--unknown-intrinsics", action="store_true", help="let COLMAP estimate the focal length"

@@ -21,8 +21,8 @@ import numpy as np
 
 from davis_io.bins import subdivide, trapezoid_weights
 from davis_io.emulator import EmulatedCamera
-from davis_io.session import Session
-from seenerf.evaluate import psnr
+from davis_io.session import DEFAULT_BINS, Session
+from seenerf.eval.metrics import psnr
 
 ADC_TOP = 1023.0
 """Largest 10-bit ADC value: frames are compared scaled to [0, 1]."""
@@ -62,7 +62,7 @@ def blur_model_psnr(
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("session", type=Path, help="an emulated session folder")
-    parser.add_argument("--bins", type=int, default=4)
+    parser.add_argument("--bins", type=int, default=DEFAULT_BINS)
     parser.add_argument(
         "--subframes", type=int, nargs="+", default=[1, 4], help="poses per bin to try"
     )

@@ -26,7 +26,7 @@ import numpy as np
 
 from davis_io.emulator import EmulatedCamera
 from davis_io.emulator.dvs import lin_log
-from davis_io.session import Session
+from davis_io.session import DEFAULT_BINS, Session
 
 SCANNED_LATENCIES_MS = tuple(range(0, 17, 2))
 
@@ -88,7 +88,7 @@ def agreement(true: np.ndarray, implied: np.ndarray, threshold: float) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("session", type=Path, help="an emulated session folder")
-    parser.add_argument("--bins", type=int, default=4)
+    parser.add_argument("--bins", type=int, default=DEFAULT_BINS)
     parser.add_argument("--frames", type=int, default=3, help="exposures to compare")
     parser.add_argument("--threshold", type=float, default=None, help="default: the true one")
     latency = parser.add_mutually_exclusive_group()

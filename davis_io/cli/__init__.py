@@ -10,8 +10,7 @@ import argparse
 import importlib
 import sys
 
-from davis_io import __version__
-from davis_io.errors import DavisIOError
+from davis_io import SeecapError, __version__
 
 __all__ = ["VERBS", "main"]
 
@@ -29,7 +28,6 @@ VERBS: dict[str, str] = {
     "fit": "seenerf.cli.fit_verb",
     "render": "seenerf.cli.render_verb",
     "eval": "seenerf.cli.eval_verb",
-    "bench": "seenerf.cli.bench_verb",
 }
 """Every verb of ``seecap``, in the order ``--help`` lists them."""
 
@@ -67,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("seecap: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except DavisIOError as error:
+    except SeecapError as error:
         print(f"seecap {args.verb}: {error}", file=sys.stderr)
         return EXIT_ERROR
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from davis_io.session.defaults import DEFAULT_BINS
+
 __all__ = ["HELP", "add_arguments", "run"]
 
 HELP = "estimate camera poses (EDI latent frames + COLMAP) and store them in the session"
@@ -13,7 +15,9 @@ HELP = "estimate camera poses (EDI latent frames + COLMAP) and store them in the
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the options of ``seecap poses``."""
     parser.add_argument("session", type=Path, help="session folder")
-    parser.add_argument("--bins", type=int, default=4, help="event bins per exposure (b)")
+    parser.add_argument(
+        "--bins", type=int, default=DEFAULT_BINS, help="event bins per exposure (b)"
+    )
     parser.add_argument(
         "--intrinsics",
         type=Path,

@@ -6,7 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from davis_io.units import parse_duration_us
+from davis_io.session.defaults import DEFAULT_BINS
+from davis_io.session.units import parse_duration_us
 
 __all__ = ["HELP", "add_arguments", "run"]
 
@@ -21,7 +22,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     limit = parser.add_mutually_exclusive_group()
     limit.add_argument("--frames", type=int, help="stop after this many frames")
     limit.add_argument("--duration", help="stop after this much time: seconds, ms or us")
-    parser.add_argument("--bins", type=int, default=4, help="event bins per exposure (default 4)")
+    parser.add_argument(
+        "--bins",
+        type=int,
+        default=DEFAULT_BINS,
+        help=f"event bins per exposure (default {DEFAULT_BINS})",
+    )
     parser.add_argument(
         "--frame-interval", help="time between frame starts (default: exposure + 50ms)"
     )

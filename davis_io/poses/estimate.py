@@ -15,7 +15,7 @@ from davis_io.geometry import interpolate_poses
 from davis_io.poses.colmap import ColmapError, SparseModel
 from davis_io.poses.latent import latent_images, sharpness
 from davis_io.poses.recovery import reconstruct_with_recovery
-from davis_io.session import Session, SessionPoses
+from davis_io.session import DEFAULT_BINS, DEFAULT_THRESHOLD, Session, SessionPoses
 
 __all__ = [
     "DEFAULT_THRESHOLD",
@@ -23,10 +23,6 @@ __all__ = [
     "estimate_poses",
     "read_intrinsics",
 ]
-
-DEFAULT_THRESHOLD = 0.3
-"""Contrast threshold when neither the caller nor the camera states one: the nominal DAVIS
-threshold at default biases, natural-log units per event."""
 
 Progress = Callable[[str, int, int], None]
 """``progress(stage, done, total)``; ``total`` is 0 when unknown."""
@@ -181,7 +177,7 @@ def _check_intrinsics(intrinsics) -> np.ndarray | None:
 def estimate_poses(
     session: Session | Path | str,
     *,
-    b: int = 4,
+    b: int = DEFAULT_BINS,
     intrinsics: np.ndarray | None = None,
     force: bool = False,
     progress: Progress | None = None,

@@ -1,12 +1,24 @@
-"""Session folders: manifest, reader and truth format (the recorder: ``session.recorder``)."""
+"""Session folders: manifest, reader and truth format (the recorder: ``session.recorder``).
 
+Also re-exported here, as the contract a trainer reads sessions by: the colour filter and its
+weights, the bins' sub-division and trapezoid weights, the shared defaults and durations.
+"""
+
+from davis_io.bins import subdivide, trapezoid_weights
+from davis_io.colorfilter import filter_weights
+from davis_io.session.defaults import DEFAULT_BINS, DEFAULT_THRESHOLD
 from davis_io.session.manifest import DropCounters, SessionManifest, read_manifest
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.store import Session
 from davis_io.session.truth import TRUTH_DIR, Truth, load_truth, save_truth
+from davis_io.session.units import parse_duration_us
+from davis_io.types import ColorFilter
 
 __all__ = [
+    "DEFAULT_BINS",
+    "DEFAULT_THRESHOLD",
     "TRUTH_DIR",
+    "ColorFilter",
     "DropCounters",
     "FramesTable",
     "Session",
@@ -14,7 +26,11 @@ __all__ = [
     "SessionManifest",
     "SessionPoses",
     "Truth",
+    "filter_weights",
     "load_truth",
+    "parse_duration_us",
     "read_manifest",
     "save_truth",
+    "subdivide",
+    "trapezoid_weights",
 ]

@@ -16,6 +16,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from davis_io.errors import SessionError
+from davis_io.session.defaults import DEFAULT_BINS
 from davis_io.session.folder import check_limits, check_preview, prepare_session_folder
 from davis_io.session.layout import H5_NAME
 from davis_io.session.manifest import (
@@ -76,7 +77,7 @@ def record(
     out_dir: Path | str,
     *,
     exposure_us: int | None = None,
-    bins: int = 4,
+    bins: int = DEFAULT_BINS,
     frames: int | None = None,
     duration_us: int | None = None,
     overwrite: bool = False,

@@ -17,8 +17,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Score; print; return 0."""
-    from seenerf.cli.fit_verb import format_scores
-    from seenerf.runs import evaluate_run
+    from seenerf.eval.scores import format_scores
+    from seenerf.train import evaluate_run
 
     print(format_scores(evaluate_run(args.run_dir)))
     return 0

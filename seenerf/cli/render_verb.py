@@ -33,7 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Render; print where; return 0."""
-    from seenerf.runs import render_run
+    from seenerf.train import render_run
 
     out = render_run(args.run_dir, tuple(args.exposure), args.path, args.out)
     print(f"renders: {out}")

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
+from davis_io.session import DEFAULT_THRESHOLD
 from seenerf.sensors.rgb_crf import warm_start_module
 
 __all__ = [
@@ -98,7 +99,7 @@ class EventCrf(nn.Module):
 
     Args:
         spec: the model's choices.
-        threshold: contrast threshold Theta (0.3).
+        threshold: contrast threshold Theta (default: the sessions' ``DEFAULT_THRESHOLD``).
         cutoff_hz: photoreceptor cut-off f_c; tau = 1 / (2 pi f_c).
         hidden: width of the delay MLP.
     """
@@ -106,7 +107,7 @@ class EventCrf(nn.Module):
     def __init__(
         self,
         spec: EventModelSpec,
-        threshold: float = 0.3,
+        threshold: float = DEFAULT_THRESHOLD,
         cutoff_hz: float = 150.0,
         hidden: int = 128,
     ):

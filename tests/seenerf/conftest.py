@@ -2,7 +2,7 @@
 
 import pytest
 
-from seenerf.synthetic import plane_scene
+from seenerf.data.synthetic import plane_scene
 
 
 @pytest.fixture(scope="session")

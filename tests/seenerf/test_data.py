@@ -1,11 +1,12 @@
 import numpy as np
 import pytest
 
+from davis_io import SeecapError
 from davis_io.errors import DavisIOError
 from davis_io.types import ColorFilter
-from seenerf.data import pixel_layout
+from seenerf.data.arrays import pixel_layout
+from seenerf.data.synthetic import plane_scene
 from seenerf.errors import SeeNerfError, TrainingDataError
-from seenerf.synthetic import plane_scene
 
 
 def test_rggb_layout_picks_one_channel_per_site():
@@ -42,7 +43,8 @@ def test_validate_ranges(field, value, message):
 
 
 def test_errors_are_caught_by_the_cli():
-    assert issubclass(SeeNerfError, DavisIOError)
+    assert issubclass(SeeNerfError, SeecapError) and issubclass(DavisIOError, SeecapError)
+    assert not issubclass(SeeNerfError, DavisIOError)
 
 
 def test_synthetic_scene_ideal_events_match_the_latent_radiance():

@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from seenerf.evaluate import (
+from seenerf.eval.metrics import (
     align_channel_scale,
     hdr_metrics,
     log_contrast,
@@ -59,8 +59,9 @@ def test_crf_error_is_zero_for_the_true_curve_and_grows_with_a_shift():
 
     import torch
 
-    from seenerf.scoring import RenderedViews, crf_error
-    from seenerf.synthetic import plane_scene, true_response
+    from seenerf.data.synthetic import plane_scene, true_response
+    from seenerf.eval.crf import crf_error
+    from seenerf.eval.views import RenderedViews
 
     scene = plane_scene(height=8, width=10, frames=2, b=2, test_views=0)
     views = RenderedViews(np.zeros((0, 4, 4)), ())
@@ -83,8 +84,9 @@ def test_crf_error_of_a_monochrome_sensor_compares_only_the_curve_it_uses():
     import torch
 
     from davis_io.types import ColorFilter
-    from seenerf.scoring import RenderedViews, crf_error
-    from seenerf.synthetic import plane_scene, true_response
+    from seenerf.data.synthetic import plane_scene, true_response
+    from seenerf.eval.crf import crf_error
+    from seenerf.eval.views import RenderedViews
 
     scene = plane_scene(height=8, width=10, frames=2, b=2, test_views=0, color=ColorFilter.MONO)
     views = RenderedViews(np.zeros((0, 4, 4)), ())
@@ -120,7 +122,7 @@ def test_residual_blur_finds_the_blur_of_a_render():
 def test_crf_plot_draws_only_the_curves_in_use(tmp_path):
     import cv2
 
-    from seenerf.export import crf_plot
+    from seenerf.eval.export import crf_plot
 
     x = np.linspace(-6.0, 4.0, 50)
     curve = 1.0 / (1.0 + np.exp(-x))

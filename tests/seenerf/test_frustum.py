@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import torch
 
-from seenerf.frustum import forward_facing_space, frustum_box
-from seenerf.rays import camera_rays
+from seenerf.render.frustum import forward_facing_space, frustum_box
+from seenerf.render.rays import camera_rays
 
 INTRINSICS = np.array([100.0, 100.0, 49.5, 39.5])
 IMAGE = (80, 100)
@@ -88,7 +88,7 @@ def test_the_box_holds_every_view_between_near_and_far():
 
 
 def test_a_ray_going_backwards_misses_every_box():
-    from seenerf.rays import SceneBox, intersect_box
+    from seenerf.render.rays import SceneBox, intersect_box
 
     space = forward_facing_space(np.stack([_pose()]), INTRINSICS, BOUNDS, IMAGE)
     origins, directions = space.rays(torch.tensor([[0.0, 0.0, -5.0]]), torch.tensor([[0, 0, -1.0]]))

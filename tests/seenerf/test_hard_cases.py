@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import torch
 
-from seenerf.config import FitConfig
-from seenerf.synthetic import plane_scene
-from seenerf.trainer import Trainer
+from seenerf.data.synthetic import plane_scene
+from seenerf.model.config import FitConfig
+from seenerf.train.trainer import Trainer
 
 
 def _check(scene, **overrides):

@@ -2,7 +2,7 @@
 
 import importlib.util
 
-from seenerf import perceptual
+from seenerf.eval import perceptual
 
 
 def test_without_the_package_lpips_is_skipped_with_the_reason(monkeypatch):

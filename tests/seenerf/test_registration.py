@@ -8,9 +8,9 @@ import torch
 from torch import nn
 
 from davis_io.geometry import rotation_error_deg
-from seenerf.evaluate import psnr
-from seenerf.registration import RegistrationSpec, pose_update, register_view
-from seenerf.synthetic import PLANE_DEPTH, plane_radiance, true_response
+from seenerf.data.synthetic import PLANE_DEPTH, plane_radiance, true_response
+from seenerf.eval.metrics import psnr
+from seenerf.eval.registration import RegistrationSpec, pose_update, register_view
 
 
 def test_pose_update_turns_and_moves_in_the_camera_frame():

@@ -4,9 +4,9 @@ import pytest
 import torch
 
 from seenerf.fields import PaperField, VectorMatrixField, positional_encoding, sample_vector_matrix
-from seenerf.rays import SceneBox, camera_rays, intersect_box
-from seenerf.render import composite, sample_weights
-from seenerf.sampling import OccupancyGrid, importance_samples, stratified_samples
+from seenerf.render.rays import SceneBox, camera_rays, intersect_box
+from seenerf.render.sampling import OccupancyGrid, importance_samples, stratified_samples
+from seenerf.render.volume import composite, sample_weights
 
 
 def test_weights_and_composite_by_hand():

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from seenerf.errors import CheckpointError
-from seenerf.export import OPENCV_TO_OPENGL, transforms_json
-from seenerf.runs import open_run, orbit_poses, read_path
+from seenerf.eval.export import OPENCV_TO_OPENGL, transforms_json
+from seenerf.train.runs import open_run, orbit_poses, read_path
 
 
 def test_orbit_circles_the_training_cameras(tiny_scene):

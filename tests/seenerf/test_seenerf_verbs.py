@@ -8,9 +8,10 @@ import pytest
 from davis_io.cli import VERBS
 from davis_io.errors import UsageError
 from seenerf.cli import fit_verb
-from seenerf.cli.fit_verb import format_scores, parse_budget_s
-from seenerf.config import FitConfig
-from seenerf.fit import fit_data
+from seenerf.cli.fit_verb import parse_budget_s
+from seenerf.eval.scores import format_scores
+from seenerf.model.config import FitConfig
+from seenerf.train import fit_data
 
 
 def test_budget_parsing():
@@ -53,7 +54,7 @@ def test_fit_writes_every_output(tiny_scene, tmp_path):
 
 
 def test_fit_verb_passes_the_contrast_threshold_to_the_fit(monkeypatch, tmp_path):
-    import seenerf.fit
+    import seenerf.train
 
     seen = {}
 
@@ -61,7 +62,7 @@ def test_fit_verb_passes_the_contrast_threshold_to_the_fit(monkeypatch, tmp_path
         seen["config"] = config
         raise SystemExit(0)
 
-    monkeypatch.setattr(seenerf.fit, "fit_session", fake_fit_session)
+    monkeypatch.setattr(seenerf.train, "fit_session", fake_fit_session)
     parser = argparse.ArgumentParser()
     fit_verb.add_arguments(parser)
     with pytest.raises(SystemExit):

@@ -6,17 +6,17 @@ import torch
 
 from davis_io.bins import trapezoid_weights
 from davis_io.geometry import rotation_error_deg
-from seenerf.batching import FrameSampler
-from seenerf.config import FitConfig
-from seenerf.errors import ConfigError
-from seenerf.subframes import (
+from seenerf.data.batching import FrameSampler
+from seenerf.data.subframes import (
     latent_fractions,
     latent_travel_px,
     median_travel_px,
     refine_exposure,
 )
-from seenerf.synthetic import plane_scene
-from seenerf.trainer import Trainer
+from seenerf.data.synthetic import plane_scene
+from seenerf.errors import ConfigError
+from seenerf.model.config import FitConfig
+from seenerf.train.trainer import Trainer
 
 SPLIT_US = np.array([1000, 1010, 1030, 1060, 1100])
 """Latent times of one exposure: intervals of 10, 20, 30 and 40 µs in a 100 µs exposure."""

@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 import torch
 
-from seenerf.builder import build_model
-from seenerf.config import FitConfig
+from seenerf.data.synthetic import plane_scene
 from seenerf.errors import CheckpointError, ConfigError
-from seenerf.presets import PRESETS, size_field
-from seenerf.synthetic import plane_scene
-from seenerf.trainer import Trainer
-from seenerf.variants import VARIANTS
+from seenerf.model.config import FitConfig
+from seenerf.model.presets import PRESETS, size_field
+from seenerf.model.variants import VARIANTS
+from seenerf.train.builder import build_model
+from seenerf.train.trainer import Trainer
 
 
 def _config(**overrides):
@@ -110,7 +110,7 @@ def test_damaged_checkpoint_is_a_typed_error(tiny_scene, tmp_path):
 
 
 def test_checkpoint_of_another_model_is_a_typed_error(tiny_scene, tmp_path):
-    from seenerf.checkpoint import load_model_state
+    from seenerf.train.checkpoint import load_model_state
 
     Trainer(tiny_scene, _config(steps=1), tmp_path, log=lambda line: None).train()
     other, _ = build_model(tiny_scene, _config(variant="base"), "cpu")
@@ -165,7 +165,7 @@ def test_progress_line_reports_losses_psnr_rate_and_eta(tiny_scene):
 
 
 def test_oracle_bounds_follow_the_truth_frame_not_the_estimated_one():
-    from seenerf.builder import training_frame
+    from seenerf.train.builder import training_frame
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
     estimated = scene.c2w.copy()
@@ -179,7 +179,7 @@ def test_oracle_bounds_follow_the_truth_frame_not_the_estimated_one():
 
 
 def test_oracle_ldr_views_use_the_true_response():
-    from seenerf.synthetic import true_response
+    from seenerf.data.synthetic import true_response
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
     model, _ = build_model(scene, _config(variant="oracle"), "cpu")

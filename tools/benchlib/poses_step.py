@@ -10,6 +10,8 @@ import sys
 import time
 from pathlib import Path
 
+from davis_io.session import DEFAULT_BINS
+
 __all__ = ["POSE_SOURCES", "main", "resolve_pose_source"]
 
 POSE_SOURCES = ("estimated", "truth")
@@ -39,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     """Store poses for ``--bins`` unless present; print the seconds spent."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--session", type=Path, required=True, help="session folder")
-    parser.add_argument("--bins", type=int, default=4, help="event bins per exposure b")
+    parser.add_argument("--bins", type=int, default=DEFAULT_BINS, help="event bins per exposure b")
     parser.add_argument("--source", choices=POSE_SOURCES, default="estimated")
     args = parser.parse_args(argv)
     start = time.perf_counter()
@@ -48,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
 
         store_true_poses(args.session, args.bins)
     else:
-        from seenerf.fit import ensure_poses
+        from seenerf.train.fit import ensure_poses
 
         ensure_poses(args.session, args.bins, print)
     print(f"poses ({args.source}, b={args.bins}): {time.perf_counter() - start:.1f} s")

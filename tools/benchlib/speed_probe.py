@@ -14,6 +14,8 @@ import json
 import sys
 from pathlib import Path
 
+from davis_io.session import DEFAULT_BINS
+
 __all__ = ["main"]
 
 
@@ -21,12 +23,12 @@ def main(argv: list[str] | None = None) -> int:
     """Load the session's training data, time every preset, print the JSON line."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--session", type=Path, required=True, help="session folder with poses")
-    parser.add_argument("--bins", type=int, default=4, help="event bins per exposure b")
+    parser.add_argument("--bins", type=int, default=DEFAULT_BINS, help="event bins per exposure b")
     parser.add_argument("--steps", type=int, default=10, help="steps per preset (paper: 1/10)")
     args = parser.parse_args(argv)
     from bench_fit import speed_table
 
-    from seenerf.session_data import load_training_data
+    from seenerf.data.session import load_training_data
 
     table = speed_table(load_training_data(args.session, args.bins), steps=args.steps)
     print(json.dumps({"rays_per_s": table}))

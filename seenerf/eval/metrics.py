@@ -1,4 +1,4 @@
-"""Image metrics (PSNR, SSIM) and scoring of rendered test views against the truth."""
+"""Image metrics: PSNR, SSIM, tone-mapped HDR and LDR scores, log contrast, residual blur."""
 
 from __future__ import annotations
 

@@ -13,8 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from davis_io.colorfilter import filter_weights
-from davis_io.types import ColorFilter
+from davis_io.session import ColorFilter, filter_weights
 from seenerf.errors import TrainingDataError
 
 __all__ = ["TestViews", "TrainTruth", "TrainingData", "pixel_layout"]

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from seenerf.data import TrainingData
-from seenerf.model import RayBatch
-from seenerf.rays import camera_rays
-from seenerf.subframes import refine_exposure
+from seenerf.data.arrays import TrainingData
+from seenerf.data.subframes import refine_exposure
+from seenerf.model.imaging import RayBatch
+from seenerf.render.rays import camera_rays
 
 __all__ = ["FrameSampler", "OracleSampler"]
 
@@ -23,7 +23,7 @@ class FrameSampler:
         calibrated: batches carry the h()-calibrated counts (True) or the raw integer counts.
         exclude: flat indices ``position_in_frames * H * W + pixel`` never drawn (validation).
         device: torch device.
-        subframes: sub-frames per bin of the exposure integral (:mod:`seenerf.subframes`).
+        subframes: sub-frames per bin of the exposure integral (:mod:`seenerf.data.subframes`).
     """
 
     def __init__(

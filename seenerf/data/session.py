@@ -8,7 +8,7 @@ import numpy as np
 
 from davis_io.geometry import interpolate_poses
 from davis_io.session import Session, Truth
-from seenerf.data import TestViews, TrainingData, TrainTruth, pixel_layout
+from seenerf.data.arrays import TestViews, TrainingData, TrainTruth, pixel_layout
 from seenerf.errors import TrainingDataError
 
 __all__ = ["load_training_data"]

@@ -6,10 +6,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from seenerf.errors import ConfigError
-from seenerf.radiance import SamplerSpec
+from seenerf.errors import by_name
+from seenerf.render.sampler_spec import SamplerSpec
 
-__all__ = ["PRESETS", "Preset", "get_preset", "size_field"]
+__all__ = ["DEFAULT_PRESET", "PRESETS", "Preset", "get_preset", "size_field"]
 
 
 @dataclass(frozen=True)
@@ -33,8 +33,8 @@ class Preset:
         patience: evaluations without improvement before an early stop (0 = never).
         max_resolution: cap of the resized field resolution.
         warm_steps: CRF warm-start steps (reference 500).
-        space: ``auto`` (a forward-facing scene in NDC, :mod:`seenerf.frustum`; any other in a
-            world box) or ``world`` (always a world box, as published).
+        space: ``auto`` (a forward-facing scene in NDC, :mod:`seenerf.render.frustum`; any other
+            in a world box) or ``world`` (always a world box, as published).
     """
 
     description: str
@@ -75,7 +75,7 @@ FAST = Preset(
     grid_every=50,
     patience=8,
 )
-"""The default preset of ``seecap fit``."""
+"""CPU-first settings, the default preset (:data:`DEFAULT_PRESET`)."""
 
 
 PRESETS: dict[str, Preset] = {
@@ -101,7 +101,10 @@ PRESETS: dict[str, Preset] = {
         patience=12,
     ),
 }
-"""Every preset by name; ``fast`` is the default of ``seecap fit``."""
+"""Every preset by name; :data:`DEFAULT_PRESET` is the default of ``seecap fit``."""
+
+DEFAULT_PRESET = "fast"
+"""The preset of a fit that names none."""
 
 
 def get_preset(name: str) -> Preset:
@@ -110,9 +113,7 @@ def get_preset(name: str) -> Preset:
     Raises:
         ConfigError: unknown name (the message lists the known ones).
     """
-    if name not in PRESETS:
-        raise ConfigError(f"unknown preset {name!r}; choose one of: {', '.join(PRESETS)}")
-    return PRESETS[name]
+    return by_name(PRESETS, "preset", name)
 
 
 def size_field(preset: Preset, span_px: float) -> Preset:

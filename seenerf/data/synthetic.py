@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from davis_io.types import ColorFilter
-from seenerf.data import TestViews, TrainingData, TrainTruth, pixel_layout
+from davis_io.session import DEFAULT_BINS, ColorFilter
+from seenerf.data.arrays import TestViews, TrainingData, TrainTruth, pixel_layout
 
 __all__ = ["PLANE_DEPTH", "plane_radiance", "plane_scene", "true_response"]
 
@@ -56,7 +56,7 @@ def plane_scene(
     height: int = 24,
     width: int = 32,
     frames: int = 6,
-    b: int = 4,
+    b: int = DEFAULT_BINS,
     exposure_s: float | np.ndarray = 0.016,
     color: ColorFilter = ColorFilter.RGGB,
     shake: float = 0.03,

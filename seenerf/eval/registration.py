@@ -10,16 +10,19 @@ fine over an image pyramid so a shift of several pixels lies inside the basin.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 import torch
 
-from seenerf.model import SeeNerfModel
-from seenerf.rays import camera_rays
+from davis_io.geometry import rotation_error_deg
+from seenerf.data.arrays import TrainingData
+from seenerf.model.model import SeeNerfModel
+from seenerf.render.rays import camera_rays
 
-__all__ = ["RegistrationSpec", "pose_update", "register_view"]
+__all__ = ["RegistrationSpec", "pose_update", "register_test_poses", "register_view"]
 
 
 @dataclass(frozen=True)
@@ -154,3 +157,38 @@ def register_view(
     if not torch.isfinite(refined).all():
         return np.asarray(c2w, np.float32)
     return refined.cpu().numpy().astype(np.float32)
+
+
+def register_test_poses(
+    model: SeeNerfModel, data: TrainingData, c2w: np.ndarray
+) -> tuple[np.ndarray, dict]:
+    """Each held-out pose refined against its LDR image at the exposure nearest the training one.
+
+    Returns:
+        The refined ``(V, 4, 4)`` poses and a summary: the exposure used, how far the poses
+        turned (median and largest, degrees) and the seconds per view.
+    """
+    exposures = np.asarray(data.test.exposures_s, np.float64)
+    index = int(np.argmin(np.abs(np.log(exposures / model.reference_exposure_s))))
+    start = time.perf_counter()
+    refined = np.stack(
+        [
+            register_view(
+                model,
+                pose,
+                data.intrinsics,
+                data.test.ldr[view, index],
+                float(exposures[index]),
+                seed=view,
+            )
+            for view, pose in enumerate(c2w)
+        ]
+    )
+    turned = rotation_error_deg(np.asarray(c2w)[:, :3, :3], refined[:, :3, :3])
+    return refined, {
+        "registered": True,
+        "exposure_s": float(exposures[index]),
+        "turned_deg_median": float(np.median(turned)),
+        "turned_deg_max": float(np.max(turned)),
+        "s_per_view": (time.perf_counter() - start) / max(len(c2w), 1),
+    }

@@ -7,9 +7,9 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from davis_io.session import DEFAULT_THRESHOLD
 from seenerf.errors import ConfigError
-from seenerf.presets import PRESETS
-from seenerf.variants import LOW_PASS_READINGS, VARIANTS
+from seenerf.model.presets import DEFAULT_PRESET, PRESETS
 
 __all__ = ["FitConfig", "load_config", "save_config"]
 
@@ -19,20 +19,24 @@ class FitConfig:
     """How to fit one session. Field docstrings double as CLI help.
 
     Attributes:
-        preset: training preset (``fast``, ``balanced``, ``paper``).
-        variant: model variant (``full`` is the paper's method).
+        preset: training preset: ``fast``, ``balanced`` or ``paper`` (the published 8x256 MLP).
+        variant: model variant: ``full`` (the paper's method) or a comparison (``no-events``,
+            ``base``, ``oracle``, ...; an unknown name lists them).
         steps: training steps; 0 uses the preset's count.
-        time_budget_s: stop training after this many seconds, poses included (0 = no budget).
+        time_budget_s: stop training after this many seconds, poses included (0 = no budget;
+            a duration on the command line: ``10m``, ``600s``).
         device: ``auto`` (CUDA when present), ``cpu`` or ``cuda``.
         seed: seed of every random draw.
-        bins: event bins per exposure b; 0 uses the session's default.
+        bins: event bins per exposure b; 0 uses the session's.
         low_pass: reading of the delay filter: ``reference`` (first order on log radiance) or
             ``paper`` (second order on linear radiance).
         event_weight: lambda of eq. 15.
         anchor_weight: weight of the CRF anchor term.
         anchor_log_exposure: ln(radiance x s) of the CRF anchor point.
         anchor_value: LDR value of the CRF at the anchor point.
-        threshold: event contrast threshold Theta.
+        threshold: effective DVS contrast threshold Theta in log units (the events alone set the
+            field's log contrast); raise it when the sensor's events undercount contrast
+            (refractory period, low bandwidth in the dark).
         cutoff_hz: photoreceptor cut-off frequency of the delay filter.
         event_share: fraction of each batch drawn among pixels with events.
         validation_share: fraction of training pixels held out for the progress PSNR.
@@ -42,12 +46,14 @@ class FitConfig:
         batch_pixels: blurry pixels per step (0: the preset's).
         warm_steps: CRF warm-start steps (-1: the preset's, the reference's 500).
         register_test_views: before scoring a fit made from estimated poses, refine each
-            held-out pose against its image (scores at the unrefined poses are kept too).
-        subframes: poses per event bin in the exposure integral (:mod:`seenerf.subframes`);
-            1 is the published b+1 latent poses.
+            held-out pose against its image (the scores at the similarity-mapped poses are kept
+            too).
+        subframes: poses per event bin in the exposure integral, interpolated between the
+            latent poses (:mod:`seenerf.data.subframes`); 1 is the published b+1 latent poses,
+            more is for motion of many pixels per bin.
     """
 
-    preset: str = "fast"
+    preset: str = DEFAULT_PRESET
     variant: str = "full"
     steps: int = 0
     time_budget_s: float = 0.0
@@ -59,7 +65,7 @@ class FitConfig:
     anchor_weight: float = 0.5
     anchor_log_exposure: float = 0.0
     anchor_value: float = 0.5
-    threshold: float = 0.3
+    threshold: float = DEFAULT_THRESHOLD
     cutoff_hz: float = 150.0
     event_share: float = 0.5
     validation_share: float = 0.01
@@ -76,6 +82,10 @@ class FitConfig:
         Raises:
             ConfigError: naming the field, the value and the accepted values.
         """
+        # Imported here, not above: the variants build torch modules, and FitConfig is read
+        # (without torch) by every ``seecap`` verb's parser, fit's options coming from its fields.
+        from seenerf.model.variants import LOW_PASS_READINGS, VARIANTS
+
         for name, table in (
             ("preset", PRESETS),
             ("variant", VARIANTS),

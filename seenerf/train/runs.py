@@ -8,16 +8,16 @@ from pathlib import Path
 
 import numpy as np
 
-from seenerf.builder import build_model, resolve_device
-from seenerf.checkpoint import load_model_state
-from seenerf.config import FitConfig, load_config
-from seenerf.data import TrainingData
+from seenerf.data.arrays import TrainingData
+from seenerf.data.session import load_training_data
 from seenerf.errors import CheckpointError
-from seenerf.export import OPENCV_TO_OPENGL, write_json
-from seenerf.fit import render_outputs
-from seenerf.model import SeeNerfModel
-from seenerf.scoring import PAPER_EXPOSURES_S, render_views, write_views
-from seenerf.session_data import load_training_data
+from seenerf.eval.export import OPENCV_TO_OPENGL, write_json
+from seenerf.eval.outputs import render_outputs
+from seenerf.eval.views import PAPER_EXPOSURES_S, render_views, write_views
+from seenerf.model.config import FitConfig, load_config
+from seenerf.model.model import SeeNerfModel
+from seenerf.train.builder import build_model, resolve_device
+from seenerf.train.checkpoint import load_model_state
 
 __all__ = ["OpenRun", "evaluate_run", "open_run", "orbit_poses", "read_path", "render_run"]
 

@@ -9,50 +9,24 @@ import torch
 from torch import nn
 
 from seenerf.fields import FIELDS
-from seenerf.frustum import FrustumSpace
-from seenerf.rays import SceneBox, intersect_box
-from seenerf.render import composite, sample_weights
-from seenerf.sampling import OccupancyGrid, PackedSamples, importance_samples, stratified_samples
+from seenerf.render.frustum import FrustumSpace
+from seenerf.render.rays import SceneBox, intersect_box
+from seenerf.render.sampler_spec import SamplerSpec
+from seenerf.render.sampling import (
+    OccupancyGrid,
+    PackedSamples,
+    importance_samples,
+    stratified_samples,
+)
+from seenerf.render.volume import composite, sample_weights
 
-__all__ = ["WEIGHT_CUTOFF", "RadianceRenderer", "RenderedRays", "SamplerSpec"]
+__all__ = ["WEIGHT_CUTOFF", "RadianceRenderer", "RenderedRays", "ValueFn"]
 
 WEIGHT_CUTOFF = 1e-4
 """Samples whose blending weight is below this get no radiance query (their share is dropped)."""
 
 ValueFn = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
 """Maps per-sample log radiance ``(S, 3)`` and ray index ``(S,)`` to the values to composite."""
-
-
-@dataclass(frozen=True)
-class SamplerSpec:
-    """Where rays are sampled.
-
-    Attributes:
-        kind: ``hierarchical`` (stratified coarse field, then importance samples for a fine field)
-            or ``occupancy`` (stratified candidates, kept only in occupied grid cells).
-        coarse: stratified samples (hierarchical) or candidates (occupancy) per ray.
-        fine: importance samples per ray. With ``occupancy`` and ``fine > 0`` the candidates'
-            densities are computed without gradients and only ``fine`` samples drawn from them
-            are shaded (a proposal pass through the same field).
-        grid_resolution: occupancy cells per side.
-        render_coarse: candidates per ray when rendering views (0: ``coarse``).
-        render_fine: shaded samples per ray when rendering views (0: ``fine``).
-        density_noise: std of Gaussian noise added to raw density while training (reference 1.0).
-    """
-
-    kind: str = "occupancy"
-    coarse: int = 128
-    fine: int = 0
-    grid_resolution: int = 64
-    density_noise: float = 0.0
-    render_coarse: int = 0
-    render_fine: int = 0
-
-    def counts(self, training: bool) -> tuple[int, int]:
-        """``(coarse, fine)`` sample counts for training or for rendering views."""
-        if training:
-            return self.coarse, self.fine
-        return self.render_coarse or self.coarse, self.render_fine or self.fine
 
 
 @dataclass

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from davis_io.bins import subdivide, trapezoid_weights
 from davis_io.geometry import interpolate_poses
-from seenerf.data import TrainingData
+from davis_io.session import subdivide, trapezoid_weights
+from seenerf.data.arrays import TrainingData
 
 __all__ = [
     "latent_fractions",

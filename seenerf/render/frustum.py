@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from seenerf.rays import SceneBox
+from seenerf.render.rays import SceneBox
 
 __all__ = ["FrustumSpace", "forward_facing_space", "frustum_box"]
 

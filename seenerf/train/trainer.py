@@ -12,13 +12,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from seenerf.batching import FrameSampler, OracleSampler
-from seenerf.builder import build_model, resolve_device
-from seenerf.checkpoint import load_checkpoint, save_checkpoint
-from seenerf.config import FitConfig
-from seenerf.data import TrainingData
-from seenerf.evaluate import psnr
-from seenerf.losses import (
+from seenerf.data.arrays import TrainingData
+from seenerf.data.batching import FrameSampler, OracleSampler
+from seenerf.eval.metrics import psnr
+from seenerf.model.config import FitConfig
+from seenerf.train.builder import build_model, resolve_device
+from seenerf.train.checkpoint import load_checkpoint, save_checkpoint
+from seenerf.train.losses import (
     LossWeights,
     event_loss,
     hdr_tone_map,
@@ -127,7 +127,7 @@ class Trainer:
             self.config.subframes,
         )
         self.oracle = None
-        if self.model.variant.supervision == "sharp-hdr":
+        if self.model.variant.supervision.truth_hdr:
             truth = data.truth
             self.oracle = OracleSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, self.device)
 

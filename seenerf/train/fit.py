@@ -9,31 +9,17 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from davis_io.session import Session
-from seenerf.config import FitConfig, save_config
-from seenerf.data import TrainingData
+from davis_io.session import DEFAULT_BINS, Session
+from seenerf.data.arrays import TrainingData
+from seenerf.data.session import load_training_data
+from seenerf.data.subframes import median_travel_px
 from seenerf.errors import TrainingDataError
-from seenerf.export import write_json
-from seenerf.model import SeeNerfModel
-from seenerf.scoring import (
-    PAPER_EXPOSURES_S,
-    crf_error,
-    plot_crf,
-    register_test_poses,
-    render_views,
-    score_views,
-    test_poses_in_fit_frame,
-    write_views,
-)
-from seenerf.session_data import load_training_data
-from seenerf.subframes import median_travel_px
-from seenerf.trainer import Trainer, TrainSummary
-from seenerf.views import IDENTITY
+from seenerf.eval.export import write_json
+from seenerf.eval.outputs import render_outputs
+from seenerf.model.config import FitConfig, save_config
+from seenerf.train.trainer import Trainer, TrainSummary
 
-__all__ = ["FitResult", "ensure_poses", "fit_data", "fit_session", "render_outputs"]
-
-DEFAULT_BINS = 4
-"""b when neither the config nor the session manifest names one (the paper's value)."""
+__all__ = ["FitResult", "ensure_poses", "fit_data", "fit_session"]
 
 
 @dataclass
@@ -155,53 +141,3 @@ def fit_data(
     }
     write_json(run_dir / "metrics.json", metrics)
     return FitResult(run_dir, summary, metrics)
-
-
-def render_outputs(
-    model: SeeNerfModel, data: TrainingData, config: FitConfig, run_dir: Path
-) -> dict:
-    """Render the held-out (or training) views, write every output file, return the scores."""
-    oracle = model.variant.supervision == "sharp-hdr"
-    poses, similarity = test_poses_in_fit_frame(data, oracle)
-    exposures = config.exposures_s or (
-        tuple(float(e) for e in data.test.exposures_s)
-        if data.test is not None
-        else PAPER_EXPOSURES_S
-    )
-    registration = None
-    if config.register_test_views and data.test is not None and similarity is not IDENTITY:
-        mapped = score_views(
-            render_views(
-                model, poses, data.intrinsics, data.image_size, exposures, data.monochrome
-            ),
-            data,
-        )
-        poses, registration = register_test_poses(model, data, poses)
-        registration["at_mapped_poses"] = {
-            "hdr_psnr": mapped["hdr"]["psnr"],
-            "novel_exposure_psnr": mapped["novel_exposure"]["psnr"],
-        }
-    views = render_views(model, poses, data.intrinsics, data.image_size, exposures, data.monochrome)
-    write_views(
-        views,
-        run_dir,
-        data.intrinsics,
-        data.image_size,
-        {
-            "seecap_variant": config.variant,
-            "seecap_preset": config.preset,
-            "seecap_units": "linear radiance, scale of the learned CRF anchor",
-        },
-    )
-    plot_crf(model, data, views, run_dir / "crf.png")
-    metrics = {
-        "variant": config.variant,
-        "preset": config.preset,
-        "similarity_scale": similarity.scale,
-        "render_s_per_view": views.render_s,
-    }
-    if data.test is not None:
-        metrics.update(score_views(views, data))
-        metrics["test_poses"] = registration or {"registered": False}
-        metrics["crf_error"] = crf_error(model, data, views)
-    return metrics

@@ -7,16 +7,17 @@ import dataclasses
 import numpy as np
 import torch
 
-from seenerf.config import FitConfig
-from seenerf.data import TrainingData
+from seenerf.data.arrays import TrainingData
+from seenerf.data.frames import truth_to_fit_frame
 from seenerf.errors import ConfigError
-from seenerf.frustum import forward_facing_space, frustum_box
-from seenerf.model import SeeNerfModel
-from seenerf.presets import Preset, get_preset, size_field
-from seenerf.radiance import RadianceRenderer
-from seenerf.rays import in_any_view, scene_box_from_cameras
-from seenerf.variants import LOW_PASS_READINGS, get_variant
-from seenerf.views import truth_to_fit_frame
+from seenerf.model.config import FitConfig
+from seenerf.model.model import SeeNerfModel
+from seenerf.model.presets import Preset, get_preset, size_field
+from seenerf.model.variants import LOW_PASS_READINGS, get_variant
+from seenerf.render.frustum import forward_facing_space, frustum_box
+from seenerf.render.rays import in_any_view, scene_box_from_cameras
+from seenerf.render.renderer import RadianceRenderer
+from seenerf.sensors.rgb_crf import TabulatedCrf
 
 __all__ = ["build_model", "resolve_device", "training_frame"]
 
@@ -36,9 +37,9 @@ def resolve_device(name: str) -> str:
     return name
 
 
-def crf_arguments(crf: str, data: TrainingData, config: FitConfig) -> dict:
+def crf_arguments(crf: type | None, data: TrainingData, config: FitConfig) -> dict:
     """Keyword arguments of the variant's RGB response: the anchor, or the truth's table."""
-    if crf == "true":
+    if crf is TabulatedCrf:
         if data.truth is None or not len(data.truth.crf_value):
             raise ConfigError("the true response is unknown: this session's truth has no crf/")
         return {"log_exposure": data.truth.crf_log_exposure, "values": data.truth.crf_value}
@@ -54,15 +55,17 @@ def training_frame(data: TrainingData, config: FitConfig) -> tuple[np.ndarray, n
     Raises:
         ConfigError: the oracle needs truth, the multi-exposure variant several exposures.
     """
-    variant = get_variant(config.variant)
-    if variant.supervision == "sharp-hdr":
+    supervision = get_variant(config.variant).supervision
+    if supervision.truth_hdr:
         if data.truth is None:
-            raise ConfigError("variant oracle needs ground truth (an emulated session with truth/)")
+            raise ConfigError(
+                f"variant {config.variant} needs ground truth (an emulated session with truth/)"
+            )
         scale = truth_to_fit_frame(data).scale
         return data.truth.c2w, (np.asarray(data.bounds, np.float64) / scale).astype(np.float32)
-    if variant.supervision == "multi-exposure" and len(np.unique(data.exposure_s)) < 2:
+    if supervision.several_exposures and len(np.unique(data.exposure_s)) < 2:
         raise ConfigError(
-            "variant multi-exposure needs frames of at least two exposures; this session has "
+            f"variant {config.variant} needs frames of at least two exposures; this session has "
             f"one ({float(data.exposure_s[0]):g} s): record with several exposures"
         )
     return data.c2w, data.bounds

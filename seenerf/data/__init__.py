@@ -1,0 +1,1 @@
+"""Training data: a session as arrays, their frames, random batches, sub-frames, a synthetic one."""

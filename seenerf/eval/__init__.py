@@ -1,0 +1,1 @@
+"""A fitted model judged: its views rendered and written, metrics, scores, registration, the CRF."""

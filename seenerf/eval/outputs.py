@@ -1,0 +1,65 @@
+"""Everything a fitted model leaves in its run: held-out views rendered, written and scored."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from seenerf.data.arrays import TrainingData
+from seenerf.data.frames import IDENTITY, test_poses_in_fit_frame
+from seenerf.eval.crf import crf_error, plot_crf
+from seenerf.eval.registration import register_test_poses
+from seenerf.eval.scores import score_views
+from seenerf.eval.views import PAPER_EXPOSURES_S, render_views, write_views
+from seenerf.model.config import FitConfig
+from seenerf.model.model import SeeNerfModel
+
+__all__ = ["render_outputs"]
+
+
+def render_outputs(
+    model: SeeNerfModel, data: TrainingData, config: FitConfig, run_dir: Path
+) -> dict:
+    """Render the held-out (or training) views, write every output file, return the scores."""
+    poses, similarity = test_poses_in_fit_frame(data, model.variant.supervision.truth_hdr)
+    exposures = config.exposures_s or (
+        tuple(float(e) for e in data.test.exposures_s)
+        if data.test is not None
+        else PAPER_EXPOSURES_S
+    )
+    registration = None
+    if config.register_test_views and data.test is not None and similarity is not IDENTITY:
+        mapped = score_views(
+            render_views(
+                model, poses, data.intrinsics, data.image_size, exposures, data.monochrome
+            ),
+            data,
+        )
+        poses, registration = register_test_poses(model, data, poses)
+        registration["at_mapped_poses"] = {
+            "hdr_psnr": mapped["hdr"]["psnr"],
+            "novel_exposure_psnr": mapped["novel_exposure"]["psnr"],
+        }
+    views = render_views(model, poses, data.intrinsics, data.image_size, exposures, data.monochrome)
+    write_views(
+        views,
+        run_dir,
+        data.intrinsics,
+        data.image_size,
+        {
+            "seecap_variant": config.variant,
+            "seecap_preset": config.preset,
+            "seecap_units": "linear radiance, scale of the learned CRF anchor",
+        },
+    )
+    plot_crf(model, data, views, run_dir / "crf.png")
+    metrics = {
+        "variant": config.variant,
+        "preset": config.preset,
+        "similarity_scale": similarity.scale,
+        "render_s_per_view": views.render_s,
+    }
+    if data.test is not None:
+        metrics.update(score_views(views, data))
+        metrics["test_poses"] = registration or {"registered": False}
+        metrics["crf_error"] = crf_error(model, data, views)
+    return metrics

@@ -1,0 +1,128 @@
+"""The paper's method and its comparisons as named variants: one table, no if/else on names."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from torch import nn
+
+from seenerf.errors import by_name
+from seenerf.model.imaging import LDR_FIELD, PIXEL, POINT, Imaging
+from seenerf.sensors.event_crf import EventModelSpec
+from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf
+
+__all__ = [
+    "BLURRY",
+    "LOW_PASS_READINGS",
+    "MULTI_EXPOSURE",
+    "SHARP_HDR",
+    "VARIANTS",
+    "Supervision",
+    "Variant",
+    "get_variant",
+]
+
+
+@dataclass(frozen=True)
+class Supervision:
+    """What training compares the model with.
+
+    Attributes:
+        truth_hdr: the truth's sharp linear HDR at the truth's poses (the oracle): the field is
+            trained in the truth's frame, on batches of the truth's images, by the HDR loss;
+            otherwise on the recorded frames at the estimated poses.
+        several_exposures: the frames must have at least two exposures.
+    """
+
+    truth_hdr: bool = False
+    several_exposures: bool = False
+
+
+BLURRY = Supervision()
+"""The recorded blurry frames (and their events)."""
+
+MULTI_EXPOSURE = Supervision(several_exposures=True)
+"""Recorded frames of several exposures."""
+
+SHARP_HDR = Supervision(truth_hdr=True)
+"""The truth's sharp HDR at the true poses: the oracle."""
+
+
+@dataclass(frozen=True)
+class Variant:
+    """What is supervised and how the sensors are modelled.
+
+    Attributes:
+        description: one line for ``--help`` and reports.
+        imaging: how rendered values become pixels (:mod:`seenerf.model.imaging`):
+            :data:`~seenerf.model.imaging.PIXEL` (blur in linear HDR, then the RGB CRF per
+            pixel: the paper), :data:`~seenerf.model.imaging.POINT` (CRF on every 3-D sample,
+            blur in LDR: HDR-NeRF style) or :data:`~seenerf.model.imaging.LDR_FIELD` (the field
+            renders LDR directly, blur in LDR, no CRF).
+        crf: the RGB response class: ``RgbCrf`` (three per-channel MLPs), ``PowerCrf`` (x^a),
+            ``TabulatedCrf`` (the truth's table, the oracle) or None.
+        events: the event model, or None for no event loss.
+        supervision: :data:`BLURRY` (recorded frames), :data:`MULTI_EXPOSURE` (frames of several
+            exposures, no events) or :data:`SHARP_HDR` (truth sharp HDR at true poses: the
+            oracle).
+    """
+
+    description: str
+    imaging: Imaging = PIXEL
+    crf: type[nn.Module] | None = RgbCrf
+    events: EventModelSpec | None = field(default_factory=EventModelSpec)
+    supervision: Supervision = BLURRY
+
+
+VARIANTS: dict[str, Variant] = {
+    "full": Variant("See-NeRF: pixel-wise RGB CRF, event CRF with delay MLP and calibrated bins"),
+    "no-events": Variant("See-NeRF without the event loss", events=None),
+    "naive-events": Variant(
+        "ideal event model: no delay compensation, raw integer counts",
+        events=EventModelSpec(delay="none", order=0, calibrated=False),
+    ),
+    "evdeblur-ecrf": Variant(
+        "Ev-DeblurNeRF eCRF: learned RGB mix for events, no delay, raw counts",
+        events=EventModelSpec(colour="learned", delay="none", order=0, calibrated=False),
+    ),
+    "v2e-lowpass": Variant(
+        "explicit v2e second-order low-pass with the fixed intensity factor",
+        events=EventModelSpec(delay="v2e", order=2),
+    ),
+    "deblur-e-lowpass": Variant(
+        "explicit Deblur-e fourth-order low-pass with the fixed intensity factor",
+        events=EventModelSpec(delay="v2e", order=4),
+    ),
+    "power-crf": Variant("EvHDR-GS power-function CRF x^a for all channels", crf=PowerCrf),
+    "point-crf-3d": Variant("HDR-NeRF style CRF on 3-D samples, blur in LDR", imaging=POINT),
+    "base": Variant("naive LDR field: no CRF, no events", imaging=LDR_FIELD, crf=None, events=None),
+    "multi-exposure": Variant(
+        "HDR-NeRF reference setting: frames at several exposures, no events",
+        events=None,
+        supervision=MULTI_EXPOSURE,
+    ),
+    "oracle": Variant(
+        "upper bound: the same field trained on truth sharp linear HDR at true poses, "
+        "LDR views through the true response",
+        crf=TabulatedCrf,
+        events=None,
+        supervision=SHARP_HDR,
+    ),
+}
+"""Every variant by name; ``full`` is the paper's method."""
+
+LOW_PASS_READINGS: dict[str, dict] = {
+    "reference": {"order": 1, "domain": "log"},
+    "paper": {"order": 2, "domain": "linear"},
+}
+"""How ``full``'s delay filter reads eq. 10: the reference code (first order on log radiance)
+or the paper's text (second order on linear radiance, ln afterwards)."""
+
+
+def get_variant(name: str) -> Variant:
+    """The variant called ``name``.
+
+    Raises:
+        ConfigError: unknown name (the message lists the known ones).
+    """
+    return by_name(VARIANTS, "variant", name)

@@ -1,0 +1,1 @@
+"""Rays, where the field is sampled along them, volume rendering, and the renderer composing it."""
