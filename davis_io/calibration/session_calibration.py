@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from davis_io.calibration.estimate import LATENCIES_US, CalibrationInput, Progress, calibrate_frames
-from davis_io.session import Session
-from davis_io.session.calibration import SensorCalibration
+from davis_io.errors import UsageError
+from davis_io.session import (
+    DEFAULT_THRESHOLD,
+    SensorCalibration,
+    Session,
+    default_calibration,
+)
 
 __all__ = ["calibrate_session", "session_calibration"]
 
@@ -61,5 +67,22 @@ def calibrate_session(
 
 
 def session_calibration(session: Session, progress: Progress | None = None) -> SensorCalibration:
-    """The stored calibration, measured first when there is none."""
-    return session.calibration() or calibrate_session(session, progress=progress)
+    """The stored calibration, measured first when there is none.
+
+    A recording that cannot be measured (too few usable frames or pixels) gets the nominal
+    sensor (:data:`~davis_io.session.DEFAULT_THRESHOLD`), stored with the reason, and a warning
+    through ``progress``.
+    """
+    stored = session.calibration()
+    if stored is not None:
+        return stored
+    try:
+        return calibrate_session(session, progress=progress)
+    except UsageError as error:
+        fallback = default_calibration(DEFAULT_THRESHOLD, f"not measured: {error}")
+        (progress or warnings.warn)(
+            f"the sensor could not be measured ({error}); using the nominal threshold "
+            f"{DEFAULT_THRESHOLD}"
+        )
+        session.write_calibration(fallback)
+        return fallback

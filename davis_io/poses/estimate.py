@@ -10,15 +10,15 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from davis_io.calibration.session_calibration import session_calibration
 from davis_io.errors import UsageError
 from davis_io.geometry import interpolate_poses
 from davis_io.poses.colmap import ColmapError, SparseModel
-from davis_io.poses.latent import latent_images, sharpness
+from davis_io.poses.latent import calibrated_response, latent_images, sharpness
 from davis_io.poses.recovery import reconstruct_with_recovery
-from davis_io.session import DEFAULT_BINS, DEFAULT_THRESHOLD, Session, SessionPoses
+from davis_io.session import DEFAULT_BINS, Session, SessionPoses
 
 __all__ = [
-    "DEFAULT_THRESHOLD",
     "PoseReport",
     "estimate_poses",
     "read_intrinsics",
@@ -39,8 +39,8 @@ class PoseReport:
         track_counts: ``(F, b+1)`` 3-D points seen by each latent frame (0: not registered).
         strategy: the recovery strategy whose model was kept.
         tried: strategies run, in order.
-        threshold: contrast threshold used by the EDI, natural-log units per event.
-        threshold_source: ``given``, ``camera configuration`` or ``default``.
+        threshold: mean ON/OFF contrast threshold the EDI used, natural-log units per event.
+        threshold_source: the calibration's source: ``measured``, ``given`` or ``default``.
         intrinsics: ``(fx, fy, cx, cy)`` pixels.
         bounds: near and far depth of the sparse points.
     """
@@ -96,7 +96,7 @@ class PoseReport:
         return cls(**data)
 
 
-def _write_latent_frames(session, bins, threshold, response, image_dir, progress):
+def _write_latent_frames(session, bins, response, image_dir, progress):
     image_dir.mkdir(parents=True, exist_ok=True)
     names, scores = [], []
     for i in range(session.frame_count):
@@ -104,7 +104,7 @@ def _write_latent_frames(session, bins, threshold, response, image_dir, progress
             session.frame(i),
             bins.calibrated[i],
             bins.weights[i],
-            threshold,
+            1.0,  # contrast bins: ln change, one unit per unit
             session.color_filter,
             response,
         )
@@ -135,6 +135,7 @@ def _session_poses(model: SparseModel, names, split_us: np.ndarray) -> SessionPo
         intrinsics=model.intrinsics,
         distortion=model.distortion,
         bounds=model.bounds,
+        time_us=split_us,
     )
 
 
@@ -196,8 +197,8 @@ def estimate_poses(
         intrinsics: known ``(fx, fy, cx, cy)`` in pixels (held fixed), or None to estimate.
         force: recompute even when poses for ``b`` and their report exist.
         progress: ``progress(stage, done, total)`` for a progress display.
-        threshold: contrast threshold (natural-log units per event), or None for the one the
-            camera configuration states, else ``DEFAULT_THRESHOLD``.
+        threshold: contrast threshold (natural-log units per event) for ON, OFF and every
+            pixel, or None for the session's calibration (measured first when missing).
 
     Returns:
         The :class:`PoseReport`.
@@ -227,14 +228,13 @@ def estimate_poses(
             f"{session.folder}: {session.frame_count} frame(s); poses need at least 2 frames "
             "seen from different positions. Record longer"
         )
-    bins = session.bins(b)
-    response = None
+    progress("calibrating the sensor", 0, 0)
+    calibration = session_calibration(session)
     if threshold is not None:
-        threshold_source = "given"
-    else:
-        threshold, threshold_source = DEFAULT_THRESHOLD, "default"
+        calibration = calibration.with_threshold(threshold)
+    bins = session.contrast_bins(b, calibration)
     names, scores = _write_latent_frames(
-        session, bins, threshold, response, work_dir / "images", progress
+        session, bins, calibrated_response(calibration), work_dir / "images", progress
     )
     total = len(names) * (b + 1)
     registered_so_far = [0]
@@ -262,8 +262,8 @@ def estimate_poses(
         track_counts=tracks,
         strategy=outcome.strategy,
         tried=outcome.tried,
-        threshold=threshold,
-        threshold_source=threshold_source,
+        threshold=calibration.threshold,
+        threshold_source=calibration.source,
         intrinsics=poses.intrinsics,
         bounds=poses.bounds,
     )

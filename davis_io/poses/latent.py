@@ -14,9 +14,16 @@ import numpy as np
 
 from davis_io.colorfilter import bayer_to_rgb_code
 from davis_io.poses.edi import edi_latent_frames
+from davis_io.session import SensorCalibration
 from davis_io.types import ColorFilter, Frame
 
-__all__ = ["ResponseCurve", "latent_images", "normalised_image", "sharpness"]
+__all__ = [
+    "ResponseCurve",
+    "calibrated_response",
+    "latent_images",
+    "normalised_image",
+    "sharpness",
+]
 
 
 @dataclass(frozen=True)
@@ -38,6 +45,29 @@ class ResponseCurve:
     def to_values(self, exposure: np.ndarray) -> np.ndarray:
         """Linear exposure to normalised pixel values, clipped to the table's range."""
         return np.interp(exposure, self.exposure, self.value)
+
+
+def calibrated_response(calibration: SensorCalibration) -> ResponseCurve | None:
+    """The inverse response a calibration measured, over all of ``[0, 1]``; None without one.
+
+    Between the black level and the first measured value the response is taken as linear
+    (exposure proportional to ``v - black``); above the last, ln exposure goes on with its
+    last slope. Values at or below the black level read no light.
+    """
+    values = np.asarray(calibration.response_value, np.float64)
+    log_exposure = np.asarray(calibration.response_log_exposure, np.float64)
+    if len(values) < 2:
+        return None
+    black = min(calibration.black_level, values[0] - 1e-3)
+    below = np.linspace(black, values[0], 8)[1:-1]
+    exposure_below = np.exp(log_exposure[0]) * (below - black) / (values[0] - black)
+    slope = (log_exposure[-1] - log_exposure[-2]) / (values[-1] - values[-2])
+    above = np.linspace(values[-1], 1.0, 4)[1:] if values[-1] < 1.0 else np.zeros(0)
+    exposure_above = np.exp(log_exposure[-1] + slope * (above - values[-1]))
+    return ResponseCurve(
+        exposure=np.concatenate([[0.0], exposure_below, np.exp(log_exposure), exposure_above]),
+        value=np.concatenate([[black], below, values, above]),
+    )
 
 
 def normalised_image(frame: Frame) -> np.ndarray:

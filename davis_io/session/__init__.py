@@ -6,6 +6,7 @@ weights, the bins' sub-division and trapezoid weights, the shared defaults and d
 
 from davis_io.bins import subdivide, trapezoid_weights
 from davis_io.colorfilter import filter_weights
+from davis_io.session.calibration import SensorCalibration, default_calibration
 from davis_io.session.defaults import DEFAULT_BINS, DEFAULT_THRESHOLD
 from davis_io.session.manifest import DropCounters, SessionManifest, read_manifest
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
@@ -25,7 +26,9 @@ __all__ = [
     "SessionBins",
     "SessionManifest",
     "SessionPoses",
+    "SensorCalibration",
     "Truth",
+    "default_calibration",
     "filter_weights",
     "load_truth",
     "parse_duration_us",

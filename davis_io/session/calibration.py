@@ -23,7 +23,13 @@ import numpy as np
 
 from davis_io.errors import SessionError
 
-__all__ = ["CALIBRATION_PATH", "SensorCalibration", "read_calibration", "write_calibration"]
+__all__ = [
+    "CALIBRATION_PATH",
+    "SensorCalibration",
+    "default_calibration",
+    "read_calibration",
+    "write_calibration",
+]
 
 CALIBRATION_PATH = "/calibration"
 _ARRAYS = ("response_value", "response_log_exposure", "pixel_factor_on", "pixel_factor_off")
@@ -44,7 +50,8 @@ class SensorCalibration:
         black_level: normalised frame value of no light.
         saturation: normalised frame value where the APS clips (1 if it never does).
         response_linear: frames are linear in exposure above the black level, as a raw DAVIS
-            frame is (the linear fit explains them as well as a free curve does).
+            frame is (the free curve is a straight line in ln(v - black)).
+        cutoff_hz: the photoreceptor's cut-off frequency in bright light, or 0 when unknown.
         response_value: ``(K,)`` increasing normalised frame values of the inverse response.
         response_log_exposure: ``(K,)`` ln(relative exposure) at those values, increasing.
         pixel_factor_on: ``(H, W)`` each pixel's ON threshold over ``threshold_on`` (median
@@ -52,7 +59,7 @@ class SensorCalibration:
         pixel_factor_off: the same for OFF.
         residual_events: RMS disagreement of frames and events after the fit, in events.
         pairs: consecutive-frame pixel pairs the fit used.
-        source: ``measured``, ``given`` or ``truth``.
+        source: ``measured``, ``given``, ``truth`` or ``default`` (nothing could be measured).
         method: one line saying how the values were found.
     """
 
@@ -64,6 +71,7 @@ class SensorCalibration:
     black_level: float = 0.0
     saturation: float = 1.0
     response_linear: bool = False
+    cutoff_hz: float = 0.0
     response_value: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     response_log_exposure: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     pixel_factor_on: np.ndarray = dataclasses.field(default_factory=lambda: np.ones((0, 0)))
@@ -77,6 +85,19 @@ class SensorCalibration:
     def threshold(self) -> float:
         """The mean of the ON and OFF thresholds (one number for the event model's units)."""
         return 0.5 * (self.threshold_on + self.threshold_off)
+
+    def with_threshold(self, threshold: float) -> SensorCalibration:
+        """This calibration with one stated threshold for ON and OFF and every pixel."""
+        return dataclasses.replace(
+            self,
+            threshold_on=float(threshold),
+            threshold_off=float(threshold),
+            threshold_on_sd=0.0,
+            threshold_off_sd=0.0,
+            pixel_factor_on=np.ones((0, 0)),
+            pixel_factor_off=np.ones((0, 0)),
+            source="given",
+        )
 
     def facts(self) -> dict:
         """The scalar fields, JSON-safe."""
@@ -102,6 +123,11 @@ class SensorCalibration:
                 f"{self.pairs} pixel pairs"
             )
         return "\n".join(lines) + (f"\nmethod: {self.method}" if self.method else "")
+
+
+def default_calibration(threshold: float, why: str) -> SensorCalibration:
+    """The nominal sensor, when nothing could be measured (``why`` says what was missing)."""
+    return SensorCalibration(threshold, threshold, source="default", method=why)
 
 
 def write_calibration(h5: h5py.File, calibration: SensorCalibration) -> None:

@@ -59,6 +59,9 @@ class SessionPoses:
         intrinsics: ``(4,)`` float64 fx, fy, cx, cy in pixels.
         distortion: ``(K,)`` float64 distortion coefficients (OpenCV order; may be empty).
         bounds: ``(2,)`` float64 near and far depth of the sparse points.
+        time_us: ``(F, b+1)`` int64 the latent time points the poses belong to (the bins' at
+            the time they were estimated), or None for poses stored without them (the stored
+            bins' then).
     """
 
     c2w: np.ndarray
@@ -66,3 +69,4 @@ class SessionPoses:
     intrinsics: np.ndarray
     distortion: np.ndarray
     bounds: np.ndarray
+    time_us: np.ndarray | None = None

@@ -273,6 +273,7 @@ class Session(Closing):
             intrinsics=group["intrinsics"][()],
             distortion=np.asarray(group["intrinsics"].attrs.get("distortion", []), np.float64),
             bounds=group["bounds"][()],
+            time_us=group["time_us"][()] if "time_us" in group else None,
         )
 
     def write_poses(self, b: int, poses: SessionPoses) -> None:
@@ -287,6 +288,10 @@ class Session(Closing):
                 f"poses for b={b} must be c2w {(*expected, 4, 4)} and registered {expected}, got "
                 f"{poses.c2w.shape} and {poses.registered.shape}"
             )
+        if poses.time_us is not None and poses.time_us.shape != expected:
+            raise SessionError(
+                f"pose times for b={b} must be {expected}, got {poses.time_us.shape}"
+            )
         if poses.intrinsics.shape != (4,) or poses.bounds.shape != (2,):
             raise SessionError("intrinsics must be (fx, fy, cx, cy) and bounds (near, far)")
         with self._writable() as h5:
@@ -299,6 +304,8 @@ class Session(Closing):
             group["intrinsics"] = np.asarray(poses.intrinsics, np.float64)
             group["intrinsics"].attrs["distortion"] = np.asarray(poses.distortion, np.float64)
             group["bounds"] = np.asarray(poses.bounds, np.float64)
+            if poses.time_us is not None:
+                group["time_us"] = np.asarray(poses.time_us, np.int64)
 
     def calibration(self) -> SensorCalibration | None:
         """The sensor calibration measured from this recording, or None before it is.

@@ -46,6 +46,7 @@ import OpenEXR
 
 from davis_io.errors import SessionError
 from davis_io.geometry import interpolate_poses
+from davis_io.session.calibration import SensorCalibration
 from davis_io.types import ColorFilter
 
 __all__ = ["TEST_EXPOSURE_FACTORS", "TRUTH_DIR", "Truth", "load_truth", "save_truth"]
@@ -103,6 +104,38 @@ class Truth:
     pixel_threshold_off: np.ndarray
     camera: dict = field(default_factory=dict)
     sensor: dict = field(default_factory=dict)
+
+    def sensor_calibration(self) -> SensorCalibration:
+        """What a perfect calibration would measure: the sensor's true values (white-box fits).
+
+        The median pixel's thresholds with every pixel's factor, the events' true delay, the
+        photoreceptor's cut-off, the response's black and clip levels and its table.
+
+        Raises:
+            SessionError: this truth does not record its sensor (written by an older version).
+        """
+        if not self.sensor or self.pixel_threshold_on.size == 0:
+            raise SessionError(
+                "this session's truth does not record its sensor's values; record it again"
+            )
+        response = self.sensor["response"]
+        medians = [float(np.median(t)) for t in (self.pixel_threshold_on, self.pixel_threshold_off)]
+        clipped = self.crf_value < np.max(self.crf_value)
+        return SensorCalibration(
+            threshold_on=medians[0],
+            threshold_off=medians[1],
+            latency_us=int(self.sensor["event_delay_us"]),
+            black_level=float(response.get("black", 0.0)),
+            saturation=float(response.get("saturation", 1.0)),
+            response_linear=response["family"] == "linear",
+            cutoff_hz=float(self.sensor["dvs"]["cutoff_hz"]),
+            response_value=self.crf_value[clipped],
+            response_log_exposure=self.crf_log_exposure[clipped],
+            pixel_factor_on=(self.pixel_threshold_on / medians[0]).astype(np.float32),
+            pixel_factor_off=(self.pixel_threshold_off / medians[1]).astype(np.float32),
+            source="truth",
+            method="the emulated sensor's true values",
+        )
 
     def c2w_at(self, times_us: np.ndarray) -> np.ndarray:
         """True camera-to-world ``(Q, 4, 4)`` at any times ``(Q,)`` µs of the recording.

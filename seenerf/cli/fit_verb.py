@@ -1,4 +1,4 @@
-"""``seecap fit``: poses if missing, See-NeRF training, renders and scores of a session."""
+"""``seecap fit``: calibration and poses if missing, See-NeRF training, renders and scores."""
 
 from __future__ import annotations
 
@@ -11,7 +11,10 @@ from seenerf.model.config import FitConfig
 
 __all__ = ["FLAGS", "HELP", "add_arguments", "parse_budget_s", "run"]
 
-HELP = "fit See-NeRF to a session (poses if missing): sharp HDR renders, LDR brackets, scores"
+HELP = (
+    "fit See-NeRF to a session (sensor calibration and poses if missing): sharp HDR renders, "
+    "LDR brackets, scores"
+)
 
 FLAGS = {"register_test_views": "--no-registration"}
 """Option strings that differ from the ones derived from :class:`FitConfig`'s field names."""
@@ -35,12 +38,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Fit, print the scores; return 0."""
+    """Calibrate and estimate poses when missing, fit, print the scores; return 0."""
+    from davis_io.prepare import prepare_session
     from seenerf.eval.scores import format_scores
     from seenerf.train import fit_session
+    from seenerf.train.fit import session_bins
 
-    config = FitConfig(**dataclass_values(FitConfig, args))
-    result = fit_session(args.session, config, run_name=args.run, fresh=args.fresh)
+    config = FitConfig(**dataclass_values(FitConfig, args)).validate()
+    spent_s = prepare_session(args.session, session_bins(args.session, config))
+    result = fit_session(args.session, config, run_name=args.run, fresh=args.fresh, spent_s=spent_s)
     print(f"run: {result.run_dir}")
     print(format_scores(result.metrics))
     return 0

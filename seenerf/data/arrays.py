@@ -85,7 +85,8 @@ class TrainingData:
         ldr: ``(F, H, W)`` raw sensor values in [0, 1] (10-bit / 1023, 8-bit / 255).
         exposure_s: ``(F,)`` exposure time of each frame, seconds.
         weights: ``(F, b+1)`` trapezoid weights of the exposure integral, rows sum to 1.
-        bins: ``(F, b, H, W)`` signed event counts with the h() offsets.
+        bins: ``(F, b, H, W)`` ln intensity change of each bin in units of ``threshold``: the
+            events weighted by their pixel's calibrated thresholds, with the h() offsets.
         bins_raw: ``(F, b, H, W)`` signed integer event counts without offsets.
         c2w: ``(F, b+1, 4, 4)`` camera-to-world per latent time point, OpenCV axes.
         intrinsics: ``(4,)`` fx, fy, cx, cy in pixels.
@@ -93,6 +94,8 @@ class TrainingData:
         mix: ``(H, W, 3)`` linear RGB weights each pixel sums (colour filter).
         channel: ``(H, W)`` int64 response-curve channel of each pixel.
         monochrome: the sensor has no colour filter: renders are luminance, one channel.
+        threshold: the unit of ``bins``: the mean of the calibrated ON and OFF thresholds.
+        cutoff_hz: the photoreceptor cut-off the calibration knows, or 0 (the config's then).
         test: held-out views with truth, if any.
         truth: training-view truth, if any (emulated sessions).
     """
@@ -108,6 +111,8 @@ class TrainingData:
     mix: np.ndarray
     channel: np.ndarray
     monochrome: bool = False
+    threshold: float = 0.3
+    cutoff_hz: float = 0.0
     test: TestViews | None = None
     truth: TrainTruth | None = None
 

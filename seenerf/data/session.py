@@ -7,23 +7,68 @@ from pathlib import Path
 import numpy as np
 
 from davis_io.geometry import interpolate_poses
-from davis_io.session import Session, Truth
+from davis_io.session import SensorCalibration, Session, SessionPoses, Truth
 from seenerf.data.arrays import TestViews, TrainingData, TrainTruth, pixel_layout
 from seenerf.errors import TrainingDataError
 
 __all__ = ["load_training_data"]
 
 
-def load_training_data(session_dir: Path | str, b: int, *, keep_lost: bool = False) -> TrainingData:
-    """Frames, bins and poses of a session as float32 training arrays.
+def _calibration(session: Session, sensor_from_truth: bool, threshold: float) -> SensorCalibration:
+    """The sensor values a fit uses: measured (or the truth's), a stated threshold over both."""
+    if sensor_from_truth:
+        truth = session.truth()
+        if truth is None:
+            raise TrainingDataError(
+                f"{session.folder}: the sensor's true values need an emulated session's truth/"
+            )
+        calibration = truth.sensor_calibration()
+    else:
+        calibration = session.calibration()
+        if calibration is None:
+            raise TrainingDataError(
+                f"{session.folder}: the sensor is not calibrated yet; run `seecap calibrate "
+                f"{session.folder}` (seecap fit runs it when missing)"
+            )
+    return calibration.with_threshold(threshold) if threshold > 0 else calibration
+
+
+def _poses_at(poses: SessionPoses, stored_times: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """The poses at other latent time points (the calibration's event latency moves them)."""
+    known_times = (poses.time_us if poses.time_us is not None else stored_times).reshape(-1)
+    if np.array_equal(known_times, times.reshape(-1)):
+        return poses.c2w
+    order = np.argsort(known_times, kind="stable")
+    unique = np.concatenate([[True], np.diff(known_times[order]) > 0])
+    known_c2w = poses.c2w.reshape(-1, 4, 4)[order][unique]
+    moved = interpolate_poses(known_times[order][unique], known_c2w, times.reshape(-1))
+    return moved.reshape(*times.shape, 4, 4)
+
+
+def load_training_data(
+    session_dir: Path | str,
+    b: int,
+    *,
+    sensor_from_truth: bool = False,
+    threshold: float = 0.0,
+    keep_lost: bool = False,
+) -> TrainingData:
+    """Frames, event bins and poses of a session as float32 training arrays.
+
+    The bins are the session's events in light time, weighted by their pixels' calibrated
+    thresholds (:meth:`~davis_io.session.Session.contrast_bins`), in units of the mean
+    threshold; the poses are moved to their latent time points.
 
     Args:
-        session_dir: the session folder.
-        b: event bins per exposure (bins are computed from the events if not stored).
+        session_dir: the session folder (calibrated, with poses for ``b``).
+        b: event bins per exposure.
+        sensor_from_truth: use the emulated sensor's true values instead of the measured ones
+            (the white-box fit).
+        threshold: a contrast threshold stated for ON, OFF and every pixel (0: calibrated).
         keep_lost: also train on frames whose exposure window lost events.
 
     Raises:
-        TrainingDataError: no poses for ``b`` yet, or no usable frame.
+        TrainingDataError: no calibration or no poses for ``b`` yet, or no usable frame.
     """
     with Session.open(session_dir) as session:
         poses = session.poses(b)
@@ -32,8 +77,10 @@ def load_training_data(session_dir: Path | str, b: int, *, keep_lost: bool = Fal
                 f"{session_dir}: no poses for b={b}; run `seecap poses {session_dir} --bins {b}` "
                 "(seecap fit runs it when missing)"
             )
+        calibration = _calibration(session, sensor_from_truth, threshold)
         table = session.frames_table()
-        bins = session.bins(b)
+        bins = session.contrast_bins(b, calibration)
+        c2w = _poses_at(poses, session.bins(b).split_us, bins.split_us)
         usable = np.flatnonzero(keep_lost | ~np.asarray(table.events_lost, bool))
         if len(usable) == 0:
             raise TrainingDataError(f"{session_dir}: every frame lost events; use keep_lost=True")
@@ -45,14 +92,16 @@ def load_training_data(session_dir: Path | str, b: int, *, keep_lost: bool = Fal
             ldr=np.clip(ldr, 0.0, 1.0),
             exposure_s=(table.exposure_us[usable] * 1e-6).astype(np.float32),
             weights=bins.weights[usable].astype(np.float32),
-            bins=bins.calibrated[usable].astype(np.float32),
+            bins=(bins.calibrated[usable] / calibration.threshold).astype(np.float32),
             bins_raw=bins.raw[usable].astype(np.float32),
-            c2w=poses.c2w[usable].astype(np.float32),
+            c2w=c2w[usable].astype(np.float32),
             intrinsics=poses.intrinsics.astype(np.float32),
             bounds=poses.bounds.astype(np.float32),
             mix=mix,
             channel=channel,
             monochrome=not session.color_filter.is_color,
+            threshold=calibration.threshold,
+            cutoff_hz=calibration.cutoff_hz,
         )
         truth = session.truth()
         if truth is not None:

@@ -7,7 +7,6 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from davis_io.session import DEFAULT_THRESHOLD
 from seenerf.errors import ConfigError
 from seenerf.model.presets import DEFAULT_PRESET, PRESETS
 
@@ -34,10 +33,11 @@ class FitConfig:
         anchor_weight: weight of the CRF anchor term.
         anchor_log_exposure: ln(radiance x s) of the CRF anchor point.
         anchor_value: LDR value of the CRF at the anchor point.
-        threshold: effective DVS contrast threshold Theta in log units (the events alone set the
-            field's log contrast); raise it when the sensor's events undercount contrast
-            (refractory period, low bandwidth in the dark).
-        cutoff_hz: photoreceptor cut-off frequency of the delay filter.
+        threshold: DVS contrast threshold Theta in log units for ON, OFF and every pixel,
+            overriding the ones measured from the recording (0: measured; the events alone set
+            the field's log contrast).
+        cutoff_hz: photoreceptor cut-off frequency of the delay filter, unless the sensor's
+            values state it.
         event_share: fraction of each batch drawn among pixels with events.
         validation_share: fraction of training pixels held out for the progress PSNR.
         exposures_s: exposures of the rendered LDR brackets (empty: the truth's or the
@@ -65,7 +65,7 @@ class FitConfig:
     anchor_weight: float = 0.5
     anchor_log_exposure: float = 0.0
     anchor_value: float = 0.5
-    threshold: float = DEFAULT_THRESHOLD
+    threshold: float = 0.0
     cutoff_hz: float = 150.0
     event_share: float = 0.5
     validation_share: float = 0.01
@@ -105,8 +105,8 @@ class FitConfig:
             )
         if not 0 <= self.event_share <= 1 or not 0 <= self.validation_share < 0.5:
             raise ConfigError("event_share must be in [0, 1] and validation_share in [0, 0.5)")
-        if self.threshold <= 0 or self.cutoff_hz <= 0:
-            raise ConfigError("threshold and cutoff_hz must be > 0")
+        if self.threshold < 0 or self.cutoff_hz <= 0:
+            raise ConfigError("threshold must be >= 0 (0: measured) and cutoff_hz > 0")
         return self
 
     def training_key(self) -> dict:

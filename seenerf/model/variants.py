@@ -65,6 +65,8 @@ class Variant:
         supervision: :data:`BLURRY` (recorded frames), :data:`MULTI_EXPOSURE` (frames of several
             exposures, no events) or :data:`SHARP_HDR` (truth sharp HDR at true poses: the
             oracle).
+        sensor_from_truth: the sensor's values (thresholds of every pixel, event latency,
+            cut-off) come from the emulator's truth instead of the session's calibration.
     """
 
     description: str
@@ -72,10 +74,16 @@ class Variant:
     crf: type[nn.Module] | None = RgbCrf
     events: EventModelSpec | None = field(default_factory=EventModelSpec)
     supervision: Supervision = BLURRY
+    sensor_from_truth: bool = False
 
 
 VARIANTS: dict[str, Variant] = {
     "full": Variant("See-NeRF: pixel-wise RGB CRF, event CRF with delay MLP and calibrated bins"),
+    "white-box": Variant(
+        "See-NeRF given the emulated sensor's true values instead of measured ones: every "
+        "pixel's thresholds, the event latency, the cut-off",
+        sensor_from_truth=True,
+    ),
     "no-events": Variant("See-NeRF without the event loss", events=None),
     "naive-events": Variant(
         "ideal event model: no delay compensation, raw integer counts",

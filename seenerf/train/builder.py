@@ -119,6 +119,9 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
         float(bounds[1]),
         float(np.median(data.exposure_s)),
         crf_args=crf_arguments(variant.crf, data, config),
-        event_args={"threshold": config.threshold, "cutoff_hz": config.cutoff_hz},
+        event_args={
+            "threshold": data.threshold,
+            "cutoff_hz": data.cutoff_hz or config.cutoff_hz,
+        },
     )
     return model.to(device), preset

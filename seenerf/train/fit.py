@@ -1,8 +1,7 @@
-"""``fit_session``: poses if missing, training, renders, scores and exports of one session."""
+"""``fit_session``: training, renders, scores and exports of one prepared session."""
 
 from __future__ import annotations
 
-import importlib
 import shutil
 import time
 from collections.abc import Callable
@@ -13,13 +12,13 @@ from davis_io.session import DEFAULT_BINS, Session
 from seenerf.data.arrays import TrainingData
 from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
-from seenerf.errors import TrainingDataError
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
 from seenerf.model.config import FitConfig, save_config
+from seenerf.model.variants import get_variant
 from seenerf.train.trainer import Trainer, TrainSummary
 
-__all__ = ["FitResult", "ensure_poses", "fit_data", "fit_session"]
+__all__ = ["FitResult", "fit_data", "fit_session", "session_bins"]
 
 
 @dataclass
@@ -31,30 +30,7 @@ class FitResult:
     metrics: dict
 
 
-def ensure_poses(session_dir: Path, b: int, log: Callable[[str], None]) -> float:
-    """Estimate poses for ``b`` if the session has none; return the seconds spent.
-
-    Raises:
-        TrainingDataError: poses are missing and the pose estimator is not available.
-    """
-    with Session.open(session_dir) as session:
-        if session.poses(b) is not None:
-            return 0.0
-    try:
-        estimate_poses = importlib.import_module("davis_io.poses").estimate_poses
-    except (ImportError, AttributeError) as error:
-        raise TrainingDataError(
-            f"{session_dir}: no poses for b={b} and the pose estimator is unavailable ({error}); "
-            "estimate poses first"
-        ) from error
-    log(f"estimating poses (b={b})")
-    start = time.perf_counter()
-    with Session.open(session_dir) as session:
-        estimate_poses(session, b=b)
-    return time.perf_counter() - start
-
-
-def session_bins(session_dir: Path, config: FitConfig) -> int:
+def session_bins(session_dir: Path | str, config: FitConfig) -> int:
     """B from the config, else the session manifest, else :data:`DEFAULT_BINS`."""
     if config.bins:
         return config.bins
@@ -69,26 +45,32 @@ def fit_session(
     run_name: str | None = None,
     fresh: bool = False,
     log: Callable[[str], None] = print,
+    spent_s: float = 0.0,
 ) -> FitResult:
-    """Fit a session end to end into ``session/fit/<run>/``.
+    """Fit a calibrated session with poses into ``session/fit/<run>/``.
 
     Args:
-        session_dir: the session folder.
-        config: the fit configuration (its time budget includes pose estimation).
+        session_dir: the session folder (``seecap fit`` calibrates it and estimates its poses
+            first when missing: :func:`davis_io.prepare.prepare_session`).
+        config: the fit configuration.
         run_name: run folder name (default ``<preset>-<variant>``).
         fresh: discard an existing checkpoint of this run instead of resuming it.
         log: receives progress lines.
+        spent_s: seconds of the time budget already spent (calibration and poses).
     """
     config = config.validate()
     session_dir = Path(session_dir)
     start = time.perf_counter()
-    b = session_bins(session_dir, config)
-    ensure_poses(session_dir, b, log)
-    data = load_training_data(session_dir, b)
-    run_dir = session_dir / "fit" / (run_name or f"{config.preset}-{config.variant}")
-    return fit_data(
-        data, config, run_dir, fresh=fresh, log=log, spent_s=time.perf_counter() - start
+    variant = get_variant(config.variant)
+    data = load_training_data(
+        session_dir,
+        session_bins(session_dir, config),
+        sensor_from_truth=variant.sensor_from_truth,
+        threshold=config.threshold,
     )
+    run_dir = session_dir / "fit" / (run_name or f"{config.preset}-{config.variant}")
+    spent_s += time.perf_counter() - start
+    return fit_data(data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s)
 
 
 def fit_data(

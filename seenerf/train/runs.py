@@ -16,6 +16,7 @@ from seenerf.eval.outputs import render_outputs
 from seenerf.eval.views import PAPER_EXPOSURES_S, render_views, write_views
 from seenerf.model.config import FitConfig, load_config
 from seenerf.model.model import SeeNerfModel
+from seenerf.model.variants import get_variant
 from seenerf.train.builder import build_model, resolve_device
 from seenerf.train.checkpoint import load_model_state
 
@@ -46,7 +47,12 @@ def open_run(run_dir: Path | str) -> OpenRun:
         )
     config = load_config(run_dir / "config.json")
     bins = json.loads((run_dir / "config.json").read_text()).get("bins", config.bins)
-    data = load_training_data(run_dir.parent.parent, int(bins))
+    data = load_training_data(
+        run_dir.parent.parent,
+        int(bins),
+        sensor_from_truth=get_variant(config.variant).sensor_from_truth,
+        threshold=config.threshold,
+    )
     model, _ = build_model(data, config, resolve_device(config.device))
     load_model_state(run_dir / "checkpoint.pt", model)
     return OpenRun(run_dir, model, data, config)

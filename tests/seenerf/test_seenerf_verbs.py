@@ -53,19 +53,29 @@ def test_fit_writes_every_output(tiny_scene, tmp_path):
     assert "novel exposures" in format_scores(metrics) and "sharpness" in format_scores(metrics)
 
 
-def test_fit_verb_passes_the_contrast_threshold_to_the_fit(monkeypatch, tmp_path):
+def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkeypatch, tmp_path):
+    import davis_io.prepare
     import seenerf.train
+    import seenerf.train.fit
 
     seen = {}
 
-    def fake_fit_session(session, config, run_name=None, fresh=False):
-        seen["config"] = config
+    def fake_prepare(session, b, log=print):
+        seen["prepared"] = (session, b)
+        return 12.5
+
+    def fake_fit_session(session, config, run_name=None, fresh=False, spent_s=0.0):
+        seen["config"], seen["spent_s"] = config, spent_s
         raise SystemExit(0)
 
+    monkeypatch.setattr(davis_io.prepare, "prepare_session", fake_prepare)
+    monkeypatch.setattr(seenerf.train.fit, "session_bins", lambda session, config: 4)
     monkeypatch.setattr(seenerf.train, "fit_session", fake_fit_session)
     parser = argparse.ArgumentParser()
     fit_verb.add_arguments(parser)
     with pytest.raises(SystemExit):
         fit_verb.run(parser.parse_args([str(tmp_path), "--threshold", "0.35"]))
+    assert seen["prepared"] == (tmp_path, 4)
+    assert seen["spent_s"] == 12.5  # the budget counts the preparation
     assert seen["config"].threshold == pytest.approx(0.35)
-    assert parser.parse_args([str(tmp_path)]).threshold == pytest.approx(0.3)
+    assert parser.parse_args([str(tmp_path)]).threshold == 0.0  # 0: measured
