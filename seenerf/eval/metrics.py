@@ -11,7 +11,9 @@ import torch.nn.functional as F  # noqa: N812
 
 __all__ = [
     "BLUR_SIGMAS_PX",
+    "HDR_ALIGNMENTS",
     "align_channel_scale",
+    "align_global_scale",
     "hdr_metrics",
     "ldr_metrics",
     "log_contrast",
@@ -89,6 +91,17 @@ def align_channel_scale(predicted: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return np.asarray(ratios)
 
 
+def align_global_scale(predicted: np.ndarray, truth: np.ndarray) -> float:
+    """One scale ``median(truth / predicted)`` over every pixel and channel.
+
+    Radiance is known up to the CRF anchor's scale, one number; a colour cast stays.
+    """
+    pred = np.asarray(predicted, np.float64).ravel()
+    true = np.asarray(truth, np.float64).ravel()
+    valid = (pred > 1e-12) & (true > 0)
+    return float(np.median(true[valid] / pred[valid])) if valid.any() else 1.0
+
+
 def tone_map_pair(predicted: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The open HDR protocol's tone map of a prediction and its truth.
 
@@ -102,17 +115,26 @@ def tone_map_pair(predicted: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray,
     return np.log1p(5000.0 * pred) / tone, np.log1p(5000.0 * true) / tone
 
 
-def hdr_metrics(predicted: list[np.ndarray], truth: list[np.ndarray], align: bool) -> dict:
-    """Mean tone-mapped PSNR and SSIM over views, optionally after one per-channel scale.
+HDR_ALIGNMENTS = {
+    "global": align_global_scale,
+    "channel": align_channel_scale,
+    "none": lambda predicted, truth: 1.0,
+}
+"""How HDR views are scaled onto the truth before scoring: one scale (the protocol), one per
+colour channel (which erases colour casts: an extra column), or none."""
+
+
+def hdr_metrics(predicted: list[np.ndarray], truth: list[np.ndarray], align: str) -> dict:
+    """Mean tone-mapped PSNR and SSIM over views after scaling them onto the truth.
 
     Args:
         predicted: linear HDR views ``(H, W, C)``.
         truth: reference views of the same shapes.
-        align: fit one per-channel scale over all views first.
+        align: a key of :data:`HDR_ALIGNMENTS`, fitted over all views at once.
     """
     if not predicted:
         return {"psnr": math.nan, "ssim": math.nan, "views": 0}
-    scale = align_channel_scale(np.stack(predicted), np.stack(truth)) if align else 1.0
+    scale = HDR_ALIGNMENTS[align](np.stack(predicted), np.stack(truth))
     pairs = [tone_map_pair(p * scale, t) for p, t in zip(predicted, truth, strict=True)]
     return {
         "psnr": float(np.mean([psnr(p, t) for p, t in pairs])),

@@ -138,7 +138,7 @@ def test_oracle_beside_full_is_read_at_the_top_budget():
 
 def test_scene_rows_judge_each_scene_at_the_top_budget():
     rows = [
-        scene_run("room", "full", 33.0, 30.5, mapped_hdr_psnr=25.0, crf_rms=0.021),
+        scene_run("room", "full", 33.0, 30.5, registered_hdr_psnr=25.0, crf_rms=0.021),
         scene_run("room", "oracle", 34.5, 33.0),
         scene_run("lamp", "full", 31.0, 29.5),
         scene_run("lamp", "oracle", 32.0, 31.0),

@@ -5,6 +5,7 @@ import pytest
 
 from seenerf.eval.metrics import (
     align_channel_scale,
+    align_global_scale,
     hdr_metrics,
     log_contrast,
     psnr,
@@ -44,14 +45,24 @@ def test_channel_scale_alignment_recovers_white_balance():
     truth = rng.uniform(0.01, 100, (2, 8, 8, 3))
     pred = truth / np.array([2.0, 3.0, 0.5])
     assert align_channel_scale(pred, truth) == pytest.approx([2.0, 3.0, 0.5])
-    aligned = hdr_metrics(list(pred), list(truth), align=True)
-    raw = hdr_metrics(list(pred), list(truth), align=False)
+    aligned = hdr_metrics(list(pred), list(truth), align="channel")
+    raw = hdr_metrics(list(pred), list(truth), align="none")
     assert aligned["psnr"] == math.inf or aligned["psnr"] > 100
     assert raw["psnr"] < 40
+    # One global scale cannot undo a colour cast: the median ratio over all channels is 2.
+    assert align_global_scale(pred, truth) == pytest.approx(2.0, rel=0.05)
+    assert hdr_metrics(list(pred), list(truth), align="global")["psnr"] < aligned["psnr"]
+
+
+def test_global_scale_recovers_a_grey_exposure_difference():
+    rng = np.random.default_rng(2)
+    truth = rng.uniform(0.01, 100, (2, 8, 8, 3))
+    assert align_global_scale(truth / 7.0, truth) == pytest.approx(7.0)
+    assert hdr_metrics(list(truth / 7.0), list(truth), align="global")["psnr"] > 100
 
 
 def test_empty_view_lists_score_nan():
-    assert math.isnan(hdr_metrics([], [], align=True)["psnr"])
+    assert math.isnan(hdr_metrics([], [], align="global")["psnr"])
 
 
 def test_crf_error_is_zero_for_the_true_curve_and_grows_with_a_shift():

@@ -44,16 +44,17 @@ class RunRow:
         train_s: training seconds in total (resumed rungs included).
         stopped: why training stopped (``budget``, ``steps``, ``plateau``).
         rays_per_s: rendered rays per second of the last rung's steps.
-        hdr_psnr: tone-mapped HDR PSNR of the held-out views, dB (scale aligned).
+        hdr_psnr: tone-mapped HDR PSNR of the held-out views at the test poses mapped from
+            the training cameras, after one global scale, dB (the headline).
         hdr_ssim: tone-mapped HDR SSIM.
-        hdr_unaligned_psnr: the same without the per-channel scale alignment, dB.
+        hdr_unaligned_psnr: the same without the scale alignment, dB.
         novel_psnr: LDR PSNR at the novel exposures (bracket's 2nd and 4th), dB.
         novel_ssim: LDR SSIM at the novel exposures.
         ldr_psnr: LDR PSNR per test exposure, ``[(exposure_s, dB), ...]`` shortest first.
         fit_psnr: best PSNR on held-out pixels of the blurry training frames, dB.
-        mapped_hdr_psnr: HDR PSNR at the held-out views' similarity-mapped true poses, before
-            they were registered to the fit, dB (NaN when not registered).
-        mapped_novel_psnr: novel-exposure PSNR likewise, dB.
+        registered_hdr_psnr: HDR PSNR with each held-out pose refined against its own test
+            image, dB (an extra column; NaN when not registered).
+        registered_novel_psnr: novel-exposure PSNR likewise, dB.
         crf_rms: the learned response's RMS difference from the true one, worst channel.
         last_terms: the loss terms of the last progress record.
         render_s_per_view: seconds to render one test view.
@@ -79,8 +80,8 @@ class RunRow:
     novel_ssim: float = NAN
     ldr_psnr: list[tuple[float, float]] = field(default_factory=list)
     fit_psnr: float = NAN
-    mapped_hdr_psnr: float = NAN
-    mapped_novel_psnr: float = NAN
+    registered_hdr_psnr: float = NAN
+    registered_novel_psnr: float = NAN
     crf_rms: float = NAN
     last_terms: dict[str, float] = field(default_factory=dict)
     render_s_per_view: float = NAN
@@ -127,9 +128,9 @@ def row_from_metrics(row: RunRow, metrics: dict) -> RunRow:
     row.hdr_unaligned_psnr = _score(metrics, "hdr_unaligned", "psnr")
     row.novel_psnr = _score(metrics, "novel_exposure", "psnr")
     row.novel_ssim = _score(metrics, "novel_exposure", "ssim")
-    mapped = metrics.get("test_poses", {}).get("at_mapped_poses", {})
-    row.mapped_hdr_psnr = _number(mapped.get("hdr_psnr"))
-    row.mapped_novel_psnr = _number(mapped.get("novel_exposure_psnr"))
+    registered = metrics.get("test_poses", {}).get("registered_scores", {})
+    row.registered_hdr_psnr = _number(registered.get("hdr_psnr"))
+    row.registered_novel_psnr = _number(registered.get("novel_exposure_psnr"))
     crf = metrics.get("crf_error") or {}
     channels = [v for v in crf.get("rms", []) if v is not None and not math.isnan(v)]
     row.crf_rms = max(channels, default=NAN)
