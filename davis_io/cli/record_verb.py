@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from davis_io.errors import UsageError
 from davis_io.session.defaults import DEFAULT_BINS
 from davis_io.session.units import parse_duration_us
 
@@ -37,6 +38,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     source.add_argument(
         "--emulate", metavar="SCENE", help="film a built-in scene (room, lamp, corridor)"
     )
+    parser.add_argument(
+        "--sensor",
+        choices=("default", "random"),
+        default="default",
+        help="with --emulate: the default sensor, or one drawn at random from --seed (its "
+        "values go only into the session's truth/)",
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, help="with --emulate: seed of the shake, noise and sensor"
+    )
     parser.add_argument("--overwrite", action="store_true", help="replace an existing session")
     parser.add_argument(
         "--preview", type=Path, help="PNG refreshed with the newest frame and its events"
@@ -48,6 +59,8 @@ def run(args: argparse.Namespace) -> int:
     from davis_io.capture import CaptureRequest, record_capture
     from davis_io.session.folder import default_session_name
 
+    if args.emulate is None and (args.sensor != "default" or args.seed):
+        raise UsageError("--sensor and --seed choose the emulated camera: use them with --emulate")
     request = CaptureRequest(
         exposure_us=_duration(args.exposure, "--exposure"),
         frame_interval_us=_duration(args.frame_interval, "--frame-interval"),
@@ -55,6 +68,8 @@ def run(args: argparse.Namespace) -> int:
         serial=args.serial,
         replay=args.replay,
         emulate=args.emulate,
+        sensor=args.sensor,
+        seed=args.seed,
     )
     if args.replay is not None and args.exposure is not None:
         print(

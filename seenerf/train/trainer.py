@@ -89,7 +89,10 @@ class Trainer:
             warm_steps=preset.warm_steps if config.warm_steps < 0 else config.warm_steps,
         )
         self.generator = torch.Generator().manual_seed(config.seed)
-        self.total_steps = config.steps or self.preset.steps
+        # A budget alone runs until it is spent or the held-out score stops rising (a plateau),
+        # not to the preset's step count: that count only sets how far the rate falls.
+        budgeted = config.time_budget_s > 0
+        self.total_steps = config.steps or (math.inf if budgeted else self.preset.steps)
         self.spent_s = spent_s
         self.weights = LossWeights(
             config.event_weight, config.anchor_weight, self.preset.smoothness
@@ -219,20 +222,21 @@ class Trainer:
         The time share is the training seconds over what the budget leaves after the caller's
         (poses); a run without a budget counts steps only.
         """
-        progress = self.summary.steps / max(self.total_steps, 1)
+        progress = self.summary.steps / max(self.total_steps, 1)  # 0 without a step count
         training_budget = self._training_budget()
         if 0 < training_budget < math.inf:
             progress = max(progress, self.summary.elapsed_s / training_budget)
         return min(progress, 1.0)
 
     def _set_learning_rate(self) -> None:
-        """The rate falls 10x every ``lr_decay_steps`` of a run that reaches its step count.
+        """The rate falls 10x every ``lr_decay_steps`` over the run's step count.
 
-        A run that its time budget stops first falls as far by its last step, so the field
-        ends annealed however fast the machine is (at half the steps, a step-based decay left
-        it at twice the final rate).
+        A run that its time budget ends falls as far by its last step as one of the preset's
+        step count, so the field ends annealed however fast the machine is (at half the steps,
+        a step-based decay left it at twice the final rate).
         """
-        decades = self.progress() * self.total_steps / self.preset.lr_decay_steps
+        steps = self.total_steps if math.isfinite(self.total_steps) else self.preset.steps
+        decades = self.progress() * steps / self.preset.lr_decay_steps
         factor = 0.1**decades
         for group, base in zip(
             self.optimizer.param_groups, (self.preset.lr, self.preset.sensor_lr), strict=True
@@ -281,8 +285,9 @@ class Trainer:
         remaining = (self.total_steps - self.summary.steps) / max(rate, 1e-9)
         eta = min(remaining, self._budget_left())
         terms = getattr(self, "last_terms", {})
+        of = f"/{self.total_steps}" if math.isfinite(self.total_steps) else ""
         self.log(
-            f"step {self.summary.steps}/{self.total_steps}  "
+            f"step {self.summary.steps}{of}  "
             + "  ".join(f"{k} {v:.4g}" for k, v in terms.items())
             + f"  val PSNR {value:.2f} dB  {rate:.2f} steps/s  ETA {eta:.0f} s"
         )

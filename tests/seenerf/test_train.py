@@ -153,6 +153,20 @@ def test_a_run_its_budget_stops_first_ends_as_annealed_as_a_full_one(tiny_scene)
     assert _field_lr_at(trainer, 4500, 10.0) == pytest.approx(base * 0.1 ** (4500 / decay))
 
 
+def test_a_budget_without_a_step_count_runs_past_the_presets_steps(tiny_scene):
+    trainer = Trainer(
+        tiny_scene, _config(steps=0, time_budget_s=100.0), log=lambda line: None, spent_s=60.0
+    )
+    steps, decay, base = trainer.preset.steps, trainer.preset.lr_decay_steps, trainer.preset.lr
+    assert trainer.total_steps == math.inf  # the budget or a plateau ends it
+    # The clock alone sets the rate: at half the 40 s, half the preset's decay, whatever the
+    # step; at the end the preset's whole decay, even far past its step count.
+    assert _field_lr_at(trainer, 2 * steps, 20.0) == pytest.approx(
+        base * 0.1 ** (steps / 2 / decay)
+    )
+    assert _field_lr_at(trainer, 3 * steps, 40.0) == pytest.approx(base * 0.1 ** (steps / decay))
+
+
 def test_progress_line_reports_losses_psnr_rate_and_eta(tiny_scene):
     lines = []
     trainer = Trainer(tiny_scene, _config(steps=4), log=lines.append)
