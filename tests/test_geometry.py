@@ -96,3 +96,27 @@ def test_intrinsics_pixel_conventions():
     opencv = opencv_from_colmap_intrinsics([280, 280, 173, 130])
     assert np.allclose(opencv, [280, 280, 172.5, 129.5])
     assert np.allclose(colmap_from_opencv_intrinsics([1, 2, 3, 4]), [1, 2, 3.5, 4.5])
+
+
+def test_align_poses_takes_its_rotation_from_the_orientations_not_the_centres():
+    from scipy.spatial.transform import Rotation
+
+    from davis_io.geometry import Similarity, align_poses
+
+    rng = np.random.default_rng(4)
+    true = np.tile(np.eye(4), (12, 1, 1))
+    true[:, :3, :3] = Rotation.from_rotvec(rng.normal(0, 0.05, (12, 3))).as_matrix()
+    true[:, :3, 3] = np.c_[rng.uniform(-0.2, 0.2, (12, 2)), np.zeros(12)]  # a hand-held plane
+    known = Similarity(3.0, rz(30), np.array([1.0, -2.0, 0.5]))
+    estimated = known.inverse().apply_poses(true)
+    # The reconstruction tilts its plane of centres by half a degree about y, not the cameras.
+    tilt = Rotation.from_rotvec([0, np.radians(0.5), 0]).as_matrix()
+    estimated[:, :3, 3] = estimated[:, :3, 3] @ (known.rotation @ tilt @ known.rotation.T).T
+    fit = align_poses(estimated, true)
+    assert np.allclose(fit.rotation, known.rotation, atol=1e-9)  # orientations are exact
+    assert fit.scale == pytest.approx(3.0, rel=1e-3)
+    mapped = fit.apply_poses(estimated)
+    assert np.allclose(rotation_error_deg(mapped[:, :3, :3], true[:, :3, :3]), 0, atol=1e-6)
+    # A fit to the centres would have turned every camera by about the tilt.
+    centres = umeyama(estimated[:, :3, 3], true[:, :3, 3])
+    assert rotation_error_deg(centres.rotation, known.rotation) > 0.4

@@ -74,6 +74,8 @@ _ARRAYS = {
     "pixel_threshold_off": "sensor/threshold_off",
 }
 _JSON_ATTRS = ("camera", "sensor")
+_OPTIONAL = ("pixel_threshold_on", "pixel_threshold_off")
+"""Arrays a truth written before they were recorded lacks (then empty)."""
 
 
 @dataclass
@@ -207,7 +209,10 @@ def load_truth(folder: str | Path) -> Truth:
     try:
         with h5py.File(path, "r") as h5:
             attrs = dict(h5.attrs)
-            arrays = {attribute: h5[name][()] for attribute, name in _ARRAYS.items()}
+            arrays = {
+                attribute: h5[name][()] if name in h5 or attribute not in _OPTIONAL else np.zeros(0)
+                for attribute, name in _ARRAYS.items()
+            }
         return Truth(
             scene=str(attrs["scene"]),
             seed=int(attrs["seed"]),

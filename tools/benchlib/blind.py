@@ -1,0 +1,319 @@
+"""The blind benchmark: sensors drawn at random, fitted from the recording, scored against truth.
+
+Each session films a built-in scene with a sensor the pipeline was not written for (``seecap
+record --sensor random --seed N``: thresholds, spread, refractory period, cut-off, latency,
+response family, colour filter), then:
+
+* ``full``: ``seecap fit SESSION --preset fast --time-budget 10m`` from the recording, sensor
+  calibration and poses included (the end-to-end time is measured);
+* ``white-box``: the same fit given the sensor's true values (every pixel's thresholds, the
+  event latency, the cut-off) instead of measured ones, for as long as ``full`` trained;
+* ``oracle``: the same field trained on sharp linear HDR at the true poses, as long.
+
+Every run is scored by ``seecap fit``'s own protocol: the true test poses mapped into the fit's
+frame by the training cameras' similarity, HDR after one global scale.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from benchlib.numbers import fmt
+from benchlib.runner import python_command, run_measured
+from benchlib.tables import markdown_table
+from davis_io.session import Session
+
+__all__ = [
+    "BLIND_SESSIONS",
+    "BlindRow",
+    "BlindSpec",
+    "blind_rows_markdown",
+    "blind_targets",
+    "row_from_runs",
+    "run_blind_session",
+]
+
+VARIANTS = ("full", "white-box", "oracle")
+EXPOSURE_S = 0.15
+TIMEOUT_S = 3600.0
+
+
+@dataclass(frozen=True)
+class BlindSpec:
+    """A blind session: a scene and the seed its sensor (and shake) is drawn from."""
+
+    scene: str
+    seed: int
+
+    @property
+    def key(self) -> str:
+        """Folder and row name."""
+        return f"{self.scene}-s{self.seed}"
+
+
+BLIND_SESSIONS = (
+    BlindSpec("room", 10),
+    BlindSpec("room", 22),
+    BlindSpec("lamp", 5),
+    BlindSpec("lamp", 9),
+    BlindSpec("corridor", 0),
+    BlindSpec("corridor", 16),
+)
+"""Six sessions over the three scenes: three monochrome (room-s22, lamp-s5, lamp-s9), three
+whose pixels have no refractory period and a fast cut-off (room-s10, room-s22, corridor-s16,
+where the threshold target applies), the four response families among them."""
+
+
+@dataclass
+class BlindRow:
+    """One blind session: its drawn sensor, what was measured, and the three fits' scores.
+
+    Attributes:
+        key: session name.
+        sensor: the truth's drawn sensor values (JSON).
+        calibration: the session's measured calibration (its facts).
+        scores: per variant, ``hdr``, ``novel``, ``ldr`` (per exposure), ``log_contrast``,
+            ``blur_px``, ``registered_hdr`` / ``registered_novel`` (the extra column),
+            ``training_s``, ``steps``.
+        end_to_end_s: wall time of ``seecap fit`` for ``full`` from the recording (calibration,
+            poses, training, renders, scores).
+        record_s: wall time of the recording.
+        errors: variant -> what failed.
+    """
+
+    key: str
+    sensor: dict = field(default_factory=dict)
+    calibration: dict = field(default_factory=dict)
+    scores: dict = field(default_factory=dict)
+    end_to_end_s: float = math.nan
+    record_s: float = math.nan
+    errors: dict = field(default_factory=dict)
+
+    @property
+    def clean_pixel(self) -> bool:
+        """No refractory period and a cut-off fast enough that nothing lags (above 1 kHz)."""
+        dvs = self.sensor.get("dvs", {})
+        return dvs.get("refractory_us", 1) == 0 and dvs.get("cutoff_hz", 0) > 1000
+
+    def threshold_errors(self) -> tuple[float, float]:
+        """Measured over drawn ON and OFF thresholds, minus 1."""
+        dvs = self.sensor.get("dvs", {})
+        try:
+            return (
+                self.calibration["threshold_on"] / dvs["threshold_on"] - 1,
+                self.calibration["threshold_off"] / dvs["threshold_off"] - 1,
+            )
+        except KeyError:
+            return math.nan, math.nan
+
+
+def _scores(metrics: dict) -> dict:
+    training = metrics.get("training", {})
+    registered = metrics.get("test_poses", {}).get("registered_scores", {})
+    return {
+        "hdr": metrics["hdr"]["psnr"],
+        "hdr_per_channel": metrics.get("hdr_per_channel", {}).get("psnr", math.nan),
+        "novel": metrics["novel_exposure"]["psnr"],
+        "ldr": {exposure: score["psnr"] for exposure, score in metrics.get("ldr", {}).items()},
+        "log_contrast": float(sum(metrics["log_contrast"]) / len(metrics["log_contrast"])),
+        "blur_px": metrics.get("residual_blur", {}).get("sigma_px", math.nan),
+        "registered_hdr": registered.get("hdr_psnr", math.nan),
+        "registered_novel": registered.get("novel_exposure_psnr", math.nan),
+        "training_s": training.get("elapsed_s", math.nan),
+        "prepare_s": training.get("seconds_before_training", math.nan),
+        "steps": training.get("steps", 0),
+        "stopped": training.get("stopped", ""),
+    }
+
+
+def row_from_runs(key: str, session_dir: Path, timings: dict) -> BlindRow:
+    """The row of a session from its runs' ``metrics.json``, calibration and truth."""
+    row = BlindRow(key, end_to_end_s=timings.get("full", math.nan))
+    row.record_s = timings.get("record", math.nan)
+    with Session.open(session_dir) as session:
+        truth = session.truth()
+        calibration = session.calibration()
+    row.sensor = truth.sensor if truth is not None else {}
+    row.calibration = calibration.facts() if calibration is not None else {}
+    for variant in VARIANTS:
+        path = session_dir / "fit" / f"blind-{variant}" / "metrics.json"
+        if path.exists():
+            row.scores[variant] = _scores(json.loads(path.read_text()))
+        else:
+            row.errors.setdefault(variant, "no metrics.json")
+    return row
+
+
+def _fit(session_dir: Path, variant: str, budget_s: float, log_dir: Path, fresh: bool):
+    argv = python_command(
+        "-m",
+        "davis_io.cli",
+        "fit",
+        str(session_dir),
+        "--preset",
+        "fast",
+        "--variant",
+        variant,
+        "--time-budget",
+        f"{budget_s:.0f}s",
+        "--run",
+        f"blind-{variant}",
+    )
+    return run_measured(
+        [*argv, *(["--fresh"] if fresh else [])], log_dir / f"{variant}.log", timeout_s=TIMEOUT_S
+    )
+
+
+def run_blind_session(
+    spec: BlindSpec, out: Path, budget_s: float, *, fresh: bool = False, log=print
+) -> BlindRow:
+    """Record one blind session (unless kept), fit the three variants (unless kept), score.
+
+    Runs whose ``metrics.json`` is kept are read back, not trained, unless ``fresh``.
+    """
+    session_dir = out / "sessions" / spec.key
+    log_dir = out / "logs" / spec.key
+    timings_path = out / "logs" / spec.key / "timings.json"
+    timings = json.loads(timings_path.read_text()) if timings_path.exists() else {}
+    if fresh or not (session_dir / "truth" / "truth.h5").exists():
+        usage = run_measured(
+            python_command(
+                "-m",
+                "davis_io.cli",
+                "record",
+                "--emulate",
+                spec.scene,
+                "--sensor",
+                "random",
+                "--seed",
+                str(spec.seed),
+                "--exposure",
+                str(EXPOSURE_S),
+                "--out",
+                str(session_dir),
+                "--overwrite",
+            ),
+            log_dir / "record.log",
+            timeout_s=TIMEOUT_S,
+        )
+        timings = {"record": usage.wall_s}
+        fresh = True
+    for variant in VARIANTS:
+        metrics = session_dir / "fit" / f"blind-{variant}" / "metrics.json"
+        if metrics.exists() and not fresh:
+            continue
+        if variant == "full":
+            budget = budget_s
+        else:  # as long as full trained: the comparison is of the sensor values, not of time
+            full = json.loads((session_dir / "fit" / "blind-full" / "metrics.json").read_text())
+            budget = max(full["training"]["elapsed_s"], 1.0)
+        log(f"{spec.key}: fitting {variant} for {budget:.0f} s")
+        usage = _fit(session_dir, variant, budget, log_dir, fresh)
+        timings[variant] = usage.wall_s
+        if usage.returncode != 0:
+            log(f"{spec.key}: {variant} failed (exit {usage.returncode}), see {log_dir}")
+            if variant == "full":
+                break
+    timings_path.parent.mkdir(parents=True, exist_ok=True)
+    timings_path.write_text(json.dumps(timings, indent=1))
+    return row_from_runs(spec.key, session_dir, timings)
+
+
+def blind_targets(row: BlindRow) -> dict[str, bool | None]:
+    """The blind-camera targets of one session: met (True), missed (False) or not measured."""
+    full, white, oracle = (row.scores.get(v) for v in VARIANTS)
+    targets: dict[str, bool | None] = {}
+    targets["log contrast 0.9-1.1"] = None if full is None else 0.9 <= full["log_contrast"] <= 1.1
+    for measure in ("hdr", "novel"):
+        targets[f"white-box − full ≤ 1 dB ({measure})"] = (
+            None if full is None or white is None else white[measure] - full[measure] <= 1.0
+        )
+        targets[f"oracle − full ≤ 3 dB ({measure})"] = (
+            None if full is None or oracle is None else oracle[measure] - full[measure] <= 3.0
+        )
+    errors = row.threshold_errors()
+    targets["thresholds within 10 % (clean pixels)"] = (
+        None
+        if not row.clean_pixel or any(math.isnan(e) for e in errors)
+        else all(abs(e) <= 0.10 for e in errors)
+    )
+    return targets
+
+
+def _sensor_cell(row: BlindRow) -> str:
+    dvs, response = row.sensor.get("dvs", {}), row.sensor.get("response", {})
+    if not dvs:
+        return "-"
+    return (
+        f"{row.sensor.get('color_filter', '?')}, {response.get('family', '?')}, "
+        f"θ {dvs['threshold_on']:.3f}/{dvs['threshold_off']:.3f} ± {dvs['threshold_sigma']:.3f}, "
+        f"{dvs['cutoff_hz']:.0f} Hz, refractory {dvs['refractory_us'] / 1000:.2f} ms, "
+        f"delay {row.sensor.get('event_delay_us', 0) / 1000:.1f} ms"
+    )
+
+
+def _measured_cell(row: BlindRow) -> str:
+    facts = row.calibration
+    if not facts:
+        return "-"
+    on, off = row.threshold_errors()
+    return (
+        f"θ {facts['threshold_on']:.3f}/{facts['threshold_off']:.3f} "
+        f"({100 * on:+.0f} %/{100 * off:+.0f} %), latency {facts['latency_us'] / 1000:.1f} ms, "
+        + ("linear" if facts.get("response_linear") else "not linear")
+    )
+
+
+def blind_rows_markdown(rows: list[BlindRow]) -> str:
+    """The blind benchmark's tables: sensors and calibration, scores, targets."""
+    sensors = [[r.key, _sensor_cell(r), _measured_cell(r)] for r in rows]
+    scores = []
+    for r in rows:
+        cells = [r.key]
+        for variant in VARIANTS:
+            s = r.scores.get(variant)
+            cells += [fmt(s["hdr"]) if s else "-", fmt(s["novel"]) if s else "-"]
+        full = r.scores.get("full")
+        cells += [
+            fmt(full["log_contrast"], 3) if full else "-",
+            fmt(full["registered_hdr"]) if full else "-",
+            fmt(r.end_to_end_s / 60, 1),
+        ]
+        scores.append(cells)
+    target_names = list(blind_targets(rows[0])) if rows else []
+    targets = [
+        [r.key]
+        + [{True: "met", False: "**missed**", None: "-"}[v] for v in blind_targets(r).values()]
+        for r in rows
+    ]
+    return "\n\n".join(
+        [
+            markdown_table(
+                ["session", "drawn sensor (truth)", "measured (seecap calibrate)"], sensors
+            ),
+            markdown_table(
+                [
+                    "session",
+                    "full HDR",
+                    "full novel",
+                    "white-box HDR",
+                    "white-box novel",
+                    "oracle HDR",
+                    "oracle novel",
+                    "full log contrast",
+                    "full HDR, registered (extra)",
+                    "full end to end, min",
+                ],
+                scores,
+            ),
+            markdown_table(["session", *target_names], targets),
+        ]
+    )
+
+
+def rows_to_json(rows: list[BlindRow]) -> list[dict]:
+    """JSON-safe rows."""
+    return [{**asdict(r), "targets": blind_targets(r)} for r in rows]
