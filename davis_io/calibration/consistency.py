@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.optimize import minimize
@@ -56,6 +57,7 @@ class ConsistencyProblem:
         knots: knots of the free inverse response.
         factor_on: ``(P,)`` the pixels' ON factors (ones until fitted); ``factor_off`` OFF.
         linear_black: None for a free response; else the black level of a linear one.
+        latency_us: how much earlier the events were moved.
     """
 
     events: PixelEvents
@@ -65,16 +67,24 @@ class ConsistencyProblem:
     factor_on: np.ndarray
     factor_off: np.ndarray
     linear_black: float | None = None
+    latency_us: int = 0
 
     def __post_init__(self) -> None:
         self._frame, self._pixel = np.nonzero(self.usable)
+
+    @cached_property
+    def _design(self) -> np.ndarray:
+        """``(Q, K-1)`` each usable pair's basis difference (the first knot's column dropped)."""
         after = hat_basis(self.values[self._frame + 1, self._pixel], self.knots)
         before = hat_basis(self.values[self._frame, self._pixel], self.knots)
-        self._design = (after - before)[:, 1:]
+        return (after - before)[:, 1:]
+
+    @cached_property
+    def _normal(self) -> np.ndarray:
+        """The smoothed normal matrix of the free response's least squares."""
         second = np.diff(np.eye(len(self.knots)), 2, axis=0)[:, 1:]
         normal = self._design.T @ self._design
-        normal += _SMOOTHNESS * len(self._design) * second.T @ second / len(self.knots)
-        self._normal = normal
+        return normal + _SMOOTHNESS * len(self._design) * second.T @ second / len(self.knots)
 
     @property
     def pairs(self) -> int:
@@ -130,7 +140,14 @@ def fit_thresholds(
         lambda theta: problem.disagreement(*theta),
         np.asarray(start, np.float64),
         method="Nelder-Mead",
-        options={"xatol": 2e-4, "fatol": 1e-9, "maxiter": 200},
+        options={
+            "xatol": 1e-3,
+            "fatol": 1e-5 * max(problem.disagreement(*start), 1e-9),
+            "maxiter": 120,
+            "initial_simplex": np.array(
+                [start, [start[0] * 1.08, start[1]], [start[0], start[1] * 1.08]], np.float64
+            ),
+        },
     )
     theta, best = found.x, float(found.fun)
     step = 0.02 * theta
@@ -166,7 +183,7 @@ def fit_pixel_factors(
     low, high = _FACTOR_RANGE
     for _ in range(steps):
         on, off = theta[0] * problem.factor_on, theta[1] * problem.factor_off
-        blur = log_blur(events, on, off)
+        blur = log_blur(events, on, off, derivatives=True)
         change = on * events.between_on - off * events.between_off + np.diff(blur.value, axis=0)
         residual = frame_change - change
         grad_on = -(events.between_on + np.diff(blur.d_on, axis=0)) * theta[0]

@@ -32,7 +32,7 @@ __all__ = ["CalibrationInput", "LATENCIES_US", "calibrate_frames"]
 LATENCIES_US = (0, 1000, 2000, 3000, 4000, 6000, 8000, 12000)
 """Event latencies tried, µs; the best is refined between its neighbours."""
 
-SUBSET_PIXELS = 12_000
+SUBSET_PIXELS = 8_000
 """Pixels the global fits (thresholds, latency) use; every pixel gets its own factors."""
 
 LINEAR_RMS = 0.03
@@ -86,8 +86,11 @@ class _Problems:
         self.values, self.usable = values, inside[:-1] & inside[1:]
         self.knots, self.pixels = knots, pixels
 
-    def at(self, latency_us: int) -> ConsistencyProblem:
-        """The problem of these pixels with events moved ``latency_us`` earlier."""
+    def at(self, latency_us: int, factors=None) -> ConsistencyProblem:
+        """The problem of these pixels with events moved ``latency_us`` earlier.
+
+        ``factors``: every sensor pixel's ON and OFF factors (flat), or None for ones.
+        """
         events = pixel_events(
             self._times,
             self._index,
@@ -97,14 +100,22 @@ class _Problems:
             len(self.pixels),
             latency_us,
         )
-        ones = np.ones(len(self.pixels))
-        return ConsistencyProblem(events, self.values, self.usable, self.knots, ones, ones.copy())
+        on, off = (
+            (np.ones(len(self.pixels)), np.ones(len(self.pixels)))
+            if factors is None
+            else (factors[0][self.pixels].copy(), factors[1][self.pixels].copy())
+        )
+        return ConsistencyProblem(
+            events, self.values, self.usable, self.knots, on, off, latency_us=latency_us
+        )
 
 
-def _best_latency(problems: _Problems, theta: np.ndarray, progress: Progress) -> int:
+def _best_latency(
+    problems: _Problems, theta: np.ndarray, factors: tuple[np.ndarray, np.ndarray], progress
+) -> int:
     costs = []
     for latency in LATENCIES_US:
-        costs.append(problems.at(latency).disagreement(*theta))
+        costs.append(problems.at(latency, factors).disagreement(*theta))
         progress(f"latency {latency / 1000:g} ms: disagreement {costs[-1]:.4f} events²")
     best = int(np.argmin(costs))
     if 0 < best < len(costs) - 1:  # the parabola's vertex through the best and its neighbours
@@ -114,6 +125,30 @@ def _best_latency(problems: _Problems, theta: np.ndarray, progress: Progress) ->
         if a > 0:
             return int(round(np.clip(-b / (2 * a), x[0], x[2])))
     return int(LATENCIES_US[best])
+
+
+def _fit_with_factors(subset: _Problems, every: ConsistencyProblem, theta, rounds, progress):
+    """Alternate every pixel's factors and the thresholds on the subset; the subset's problem."""
+    problem = subset.at(every.latency_us, (every.factor_on, every.factor_off))
+    theta, _, _ = fit_thresholds(problem, theta)
+    for _round in range(rounds):
+        _, response = problem.solve(*theta)
+        theta = fit_pixel_factors(every, theta, response)
+        problem.factor_on = every.factor_on[subset.pixels]
+        problem.factor_off = every.factor_off[subset.pixels]
+        theta, _, _ = fit_thresholds(problem, theta)
+        progress(f"thresholds with pixel factors: ON {theta[0]:.3f}, OFF {theta[1]:.3f}")
+    return theta, problem
+
+
+def _split_half_spread(recording, subset: _Problems, every, theta, levels) -> np.ndarray:
+    """Half the difference of the thresholds two disjoint halves of the pixels give."""
+    halves = []
+    for pixels in (subset.pixels[0::2], subset.pixels[1::2]):
+        half = _Problems(recording, pixels, levels, subset.knots)
+        problem = half.at(every.latency_us, (every.factor_on, every.factor_off))
+        halves.append(fit_thresholds(problem, theta)[0])
+    return 0.5 * np.abs(halves[0] - halves[1])
 
 
 def _choose_pixels(recording: CalibrationInput, levels: FrameLevels, seed: int) -> np.ndarray:
@@ -143,29 +178,21 @@ def calibrate_frames(
         raise UsageError("calibration needs at least two frames; record longer")
     levels = frame_levels(recording.frames, recording.adc_step)
     knots = place_knots(recording.frames, levels, KNOTS, recording.adc_step)
-    subset = _Problems(recording, _choose_pixels(recording, levels, seed), levels, knots)
-    theta, _, _ = fit_thresholds(subset.at(0), (0.3, 0.3))
-    progress(f"thresholds at no latency: ON {theta[0]:.3f}, OFF {theta[1]:.3f}")
-    latency = _best_latency(subset, theta, progress)
     height, width = recording.shape
-    every = _Problems(recording, np.arange(height * width), levels, knots).at(latency)
-    problem = subset.at(latency)
-    theta, _, _ = fit_thresholds(problem, theta)
-    for _round in range(2):
-        _, response = problem.solve(*theta)
-        theta = fit_pixel_factors(every, theta, response)
-        problem.factor_on = every.factor_on[subset.pixels]
-        problem.factor_off = every.factor_off[subset.pixels]
-        theta, cost, sd = fit_thresholds(problem, theta)
-        progress(f"thresholds with pixel factors: ON {theta[0]:.3f}, OFF {theta[1]:.3f}")
+    subset = _Problems(recording, _choose_pixels(recording, levels, seed), levels, knots)
+    everything = _Problems(recording, np.arange(height * width), levels, knots)
+    theta, _, _ = fit_thresholds(subset.at(0), (0.3, 0.3))
+    every = everything.at(0)
+    theta, _ = _fit_with_factors(subset, every, theta, 1, progress)
+    latency = _best_latency(subset, theta, (every.factor_on, every.factor_off), progress)
+    factors = (every.factor_on, every.factor_off)
+    every = everything.at(latency, factors)
+    theta, problem = _fit_with_factors(subset, every, theta, 2, progress)
+    spread = _split_half_spread(recording, subset, every, theta, levels)
     residual, response = problem.solve(*theta)
     pile_up = levels.black_level if levels.black_level > 0 else None
     black, power, straightness = linear_fit(response, pile_up)
     is_linear = straightness < LINEAR_RMS
-    if is_linear:
-        problem.linear_black = black
-        theta, cost, sd = fit_thresholds(problem, theta)
-        residual, response = problem.solve(*theta)
     progress(
         f"response {'linear' if is_linear else 'not linear'}: the free curve is a power "
         f"{power:.2f} of v - {black:.3f} to {straightness:.3f} RMS"
@@ -173,10 +200,10 @@ def calibrate_frames(
     return SensorCalibration(
         threshold_on=float(theta[0]),
         threshold_off=float(theta[1]),
-        threshold_on_sd=float(sd[0]),
-        threshold_off_sd=float(sd[1]),
+        threshold_on_sd=float(spread[0]),
+        threshold_off_sd=float(spread[1]),
         latency_us=latency,
-        black_level=black if is_linear else levels.black_level,
+        black_level=levels.black_level,
         saturation=levels.saturation,
         response_linear=bool(is_linear),
         response_value=response.knots,
@@ -187,5 +214,6 @@ def calibrate_frames(
         pairs=problem.pairs,
         source="measured",
         method="frame/event consistency of consecutive exposures (blur integral, free "
-        "inverse response, per-pixel factors), latency profiled",
+        "inverse response, per-pixel factors), latency profiled; uncertainty: split-half "
+        "spread over the pixels",
     )

@@ -143,15 +143,21 @@ class LogBlur:
     """
 
     value: np.ndarray
-    d_on: np.ndarray
-    d_off: np.ndarray
+    d_on: np.ndarray | None = None
+    d_off: np.ndarray | None = None
 
 
-def log_blur(events: PixelEvents, theta_on: np.ndarray, theta_off: np.ndarray) -> LogBlur:
+def log_blur(
+    events: PixelEvents,
+    theta_on: np.ndarray,
+    theta_off: np.ndarray,
+    derivatives: bool = False,
+) -> LogBlur:
     """``ln M`` of every frame and pixel for per-pixel thresholds ``(P,)`` (or scalars).
 
     ``M = lead + sum over segments of share * exp(theta_on on - theta_off off)``, at least the
-    lead share and never zero (a segment's weight is positive).
+    lead share and never zero (a segment's weight is positive). The derivatives cost twice the
+    value again: only when asked.
     """
     frames, count = events.frames, events.pixels
     pixel = events.segment_key % count
@@ -163,6 +169,8 @@ def log_blur(events: PixelEvents, theta_on: np.ndarray, theta_off: np.ndarray) -
     size = frames * count
     total = np.bincount(events.segment_key, weights=weight, minlength=size).reshape(frames, count)
     total += events.lead_share
+    if not derivatives:
+        return LogBlur(np.log(total))
     on = np.bincount(events.segment_key, weights=weight * events.segment_on, minlength=size)
     off = np.bincount(events.segment_key, weights=weight * events.segment_off, minlength=size)
     return LogBlur(
