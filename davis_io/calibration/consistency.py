@@ -127,9 +127,9 @@ class ConsistencyProblem:
 
 
 def fit_thresholds(
-    problem: ConsistencyProblem, start: tuple[float, float]
+    problem: ConsistencyProblem, start: tuple[float, float], tolerance: float = 1e-3
 ) -> tuple[np.ndarray, float, np.ndarray]:
-    """ON and OFF thresholds that minimise the disagreement, from ``start``.
+    """ON and OFF thresholds that minimise the disagreement, from ``start``, to ``tolerance``.
 
     Returns:
         The thresholds ``(2,)``, the disagreement there (events squared) and the standard
@@ -141,7 +141,7 @@ def fit_thresholds(
         np.asarray(start, np.float64),
         method="Nelder-Mead",
         options={
-            "xatol": 1e-3,
+            "xatol": tolerance,
             "fatol": 1e-5 * max(problem.disagreement(*start), 1e-9),
             "maxiter": 120,
             "initial_simplex": np.array(

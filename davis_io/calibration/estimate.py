@@ -147,7 +147,7 @@ def _split_half_spread(recording, subset: _Problems, every, theta, levels) -> np
     for pixels in (subset.pixels[0::2], subset.pixels[1::2]):
         half = _Problems(recording, pixels, levels, subset.knots)
         problem = half.at(every.latency_us, (every.factor_on, every.factor_off))
-        halves.append(fit_thresholds(problem, theta)[0])
+        halves.append(fit_thresholds(problem, theta, tolerance=1e-4)[0])
     return 0.5 * np.abs(halves[0] - halves[1])
 
 
@@ -203,7 +203,7 @@ def calibrate_frames(
         threshold_on_sd=float(spread[0]),
         threshold_off_sd=float(spread[1]),
         latency_us=latency,
-        black_level=levels.black_level,
+        black_level=levels.black_level or (black if is_linear else 0.0),
         saturation=levels.saturation,
         response_linear=bool(is_linear),
         response_value=response.knots,

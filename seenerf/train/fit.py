@@ -18,7 +18,7 @@ from seenerf.model.config import FitConfig, save_config
 from seenerf.model.variants import get_variant
 from seenerf.train.trainer import Trainer, TrainSummary
 
-__all__ = ["FitResult", "fit_data", "fit_session", "session_bins"]
+__all__ = ["FitResult", "fit_data", "fit_session", "resolved_settings", "session_bins"]
 
 
 @dataclass
@@ -73,6 +73,20 @@ def fit_session(
     return fit_data(data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s)
 
 
+def resolved_settings(trainer: Trainer) -> dict:
+    """What a fit resolved for its scene, saved beside its config: field, box, space, sensor."""
+    renderer = trainer.model.renderer
+    return {
+        "field": trainer.preset.field,
+        "field_args": trainer.preset.field_args,
+        "bins": trainer.data.num_bins,
+        "box": {"low": renderer.box.low, "high": renderer.box.high},
+        "space": "ndc" if renderer.space is not None else "world",
+        "event_threshold": trainer.data.threshold,
+        "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.cutoff_hz,
+    }
+
+
 def fit_data(
     data: TrainingData,
     config: FitConfig,
@@ -92,17 +106,7 @@ def fit_data(
         f"image motion between latent poses: median {travel_px:.1f} px at the mean depth; "
         f"{config.subframes} pose(s) per bin in the blur integral"
     )
-    save_config(
-        config,
-        run_dir / "config.json",
-        {
-            "field": trainer.preset.field,
-            "field_args": trainer.preset.field_args,
-            "bins": data.num_bins,
-            "box": {"low": trainer.model.renderer.box.low, "high": trainer.model.renderer.box.high},
-            "space": "ndc" if trainer.model.renderer.space is not None else "world",
-        },
-    )
+    save_config(config, run_dir / "config.json", resolved_settings(trainer))
     summary = trainer.train()
     log(
         f"trained {summary.steps} steps in {summary.elapsed_s:.0f} s ({summary.stopped}); "

@@ -1,0 +1,105 @@
+"""The camera is a black box: no emulator fact reaches the pipeline, and mono stays mono.
+
+One small monochrome emulated session is recorded twice over: as recorded (with ``truth/``),
+and as a real camera would leave it (no ``truth/``, nothing about its source in
+``session.json``). Calibration, poses, the resolved fit and its first losses must not tell them
+apart.
+"""
+
+import json
+import shutil
+
+import cv2
+import numpy as np
+import OpenEXR
+import pytest
+import torch
+
+from davis_io.emulator import EmulatedCamera
+from davis_io.prepare import prepare_session
+from davis_io.session import Session
+from davis_io.session.recorder import record
+from davis_io.types import ColorFilter
+from seenerf.data.session import load_training_data
+from seenerf.model.config import FitConfig
+from seenerf.train import fit_session, render_run
+from seenerf.train.fit import resolved_settings
+from seenerf.train.trainer import Trainer
+
+SMALL = dict(frames=6, test_views=1, baseline_m=0.18, width=173, height=130, focal_px=140.0)
+
+
+@pytest.fixture(scope="module")
+def twins(tmp_path_factory):
+    root = tmp_path_factory.mktemp("blind")
+    camera = EmulatedCamera("room", color_filter=ColorFilter.MONO, seed=3, **SMALL)
+    record(camera, root / "emulated", bins=4)
+    camera.write_truth(root / "emulated")
+    shutil.copytree(root / "emulated", root / "camera")
+    shutil.rmtree(root / "camera" / "truth")
+    manifest_path = root / "camera" / "session.json"
+    manifest = json.loads(manifest_path.read_text())
+    manifest.update(source="usb", serial="00000001", device_config={})
+    manifest_path.write_text(json.dumps(manifest))
+    for name in ("emulated", "camera"):
+        prepare_session(root / name, 4, log=lambda line: None)
+    return root / "emulated", root / "camera"
+
+
+def test_session_json_of_an_emulated_recording_states_no_sensor_value(twins):
+    emulated, _ = twins
+    text = (emulated / "session.json").read_text()
+    for fact in ("threshold", "response", "dvs", "refractory", "cutoff", "noisy", "reinhard"):
+        assert fact not in text
+
+
+def test_calibration_and_poses_are_the_same_without_the_emulators_facts(twins):
+    with Session.open(twins[0]) as emulated, Session.open(twins[1]) as camera:
+        assert camera.truth() is None and emulated.truth() is not None
+        measured, blind = emulated.calibration(), camera.calibration()
+        assert measured.facts() == blind.facts()
+        for field in ("pixel_factor_on", "pixel_factor_off", "response_log_exposure"):
+            assert np.array_equal(getattr(measured, field), getattr(blind, field))
+        poses, blind_poses = emulated.poses(4), camera.poses(4)
+        assert poses.registered.all()
+        assert np.array_equal(poses.c2w, blind_poses.c2w)
+        assert np.array_equal(poses.intrinsics, blind_poses.intrinsics)
+
+
+def test_the_resolved_fit_and_its_first_losses_are_the_same(twins):
+    config = FitConfig(steps=3, seed=5, threads=1, warm_steps=20)
+    losses, settings = [], []
+    for folder in twins:
+        data = load_training_data(folder, 4)
+        trainer = Trainer(data, config, log=lambda line: None)
+        settings.append(json.dumps(resolved_settings(trainer), default=str))
+        steps = []
+        for _ in range(3):
+            torch.manual_seed(0)
+            trainer._step()
+            trainer.summary.steps += 1
+            steps.append(trainer.last_terms)
+        losses.append(steps)
+    assert settings[0] == settings[1]
+    assert losses[0] == losses[1]
+    assert losses[0][0]["events"] > 0  # the events take part
+
+
+def _channels(path):
+    with OpenEXR.File(str(path)) as exr:
+        return sorted(exr.channels())
+
+
+def test_a_mono_session_without_truth_renders_mono_everywhere(twins):
+    _, camera = twins
+    result = fit_session(camera, FitConfig(steps=2, warm_steps=10), log=lambda line: None)
+    renders = result.run_dir / "renders"
+    exrs, pngs = sorted(renders.rglob("*.exr")), sorted(renders.rglob("*.png"))
+    assert exrs and pngs
+    assert all(_channels(path) == ["Y"] for path in exrs)
+    assert all(cv2.imread(str(path), cv2.IMREAD_UNCHANGED).ndim == 2 for path in pngs)
+    orbit = render_run(result.run_dir, exposures_s=(0.01, 0.1), path="orbit", out_name="orbit")
+    assert all(_channels(path) == ["Y"] for path in orbit.rglob("*.exr"))
+    grey = [cv2.imread(str(p), cv2.IMREAD_UNCHANGED).ndim for p in orbit.rglob("*.png")]
+    assert grey and set(grey) == {2}
+    assert "hdr" not in result.metrics  # nothing to score without truth: renders only
