@@ -8,7 +8,8 @@ For every session of :data:`benchlib.blind.BLIND_SESSIONS`: record it with a ran
 sensor's true values) and ``oracle`` for as long as ``full`` trained; score all three by the
 fit's own protocol. Kept sessions and runs are read back (``--fresh`` redoes them). Writes
 ``OUT/blind.json`` and ``OUT/blind.md`` after every session; about 35 minutes per session on
-2 cores.
+2 cores. ``--publish`` then copies ``blind.json`` to ``bench-results/`` and splices the report
+into BENCHMARKS.md between its blind-benchmark markers.
 """
 
 from __future__ import annotations
@@ -19,8 +20,16 @@ import sys
 import time
 from pathlib import Path
 
-from benchlib.blind import BLIND_SESSIONS, blind_rows_markdown, rows_to_json, run_blind_session
+from benchlib.blind import (
+    BLIND_SESSIONS,
+    blind_report,
+    rows_to_json,
+    run_blind_session,
+)
 from benchlib.machine import describe_machine, exact_command, source_commit
+from benchlib.publish import BLIND_BEGIN, BLIND_END, RESULTS_FOLDER, splice
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -31,6 +40,9 @@ def main(argv: list[str] | None = None) -> int:
         "--sessions", nargs="+", default=[s.key for s in BLIND_SESSIONS], help="session keys"
     )
     parser.add_argument("--fresh", action="store_true", help="record and fit everything again")
+    parser.add_argument(
+        "--publish", action="store_true", help="copy the results into the repository's report"
+    )
     args = parser.parse_args(argv)
     chosen = [s for s in BLIND_SESSIONS if s.key in args.sessions]
     rows, start = [], time.time()
@@ -45,8 +57,16 @@ def main(argv: list[str] | None = None) -> int:
             "rows": rows_to_json(rows),
         }
         (args.out / "blind.json").write_text(json.dumps(document, indent=1, default=str))
-        (args.out / "blind.md").write_text(blind_rows_markdown(rows) + "\n")
-    print(blind_rows_markdown(rows))
+        (args.out / "blind.md").write_text(blind_report(document) + "\n")
+    print(blind_report(document))
+    if args.publish:
+        results = ROOT / RESULTS_FOLDER
+        results.mkdir(exist_ok=True)
+        (results / "blind.json").write_text(json.dumps(document, indent=1, default=str))
+        report = ROOT / "BENCHMARKS.md"
+        report.write_text(
+            splice(report.read_text(), blind_report(document), BLIND_BEGIN, BLIND_END)
+        )
     return 0
 
 

@@ -16,8 +16,17 @@ SENSOR = {
 }
 
 
+BRACKET = {"0.009375": 31.0, "0.0375": 30.0, "0.15": 29.0, "0.6": 26.0, "2.4": 24.0}
+
+
 def scores(hdr, novel, contrast=1.0):
-    return {"hdr": hdr, "novel": novel, "log_contrast": contrast, "registered_hdr": math.nan}
+    return {
+        "hdr": hdr,
+        "novel": novel,
+        "log_contrast": contrast,
+        "registered_hdr": math.nan,
+        "ldr": BRACKET,
+    }
 
 
 def test_targets_of_a_session_that_meets_them_and_of_one_that_misses():
@@ -54,6 +63,8 @@ def test_a_lagging_pixel_is_not_held_to_the_threshold_target_and_missing_runs_ar
     assert targets["white-box − full ≤ 1 dB (hdr)"] is None and targets["log contrast 0.9-1.1"]
     table = blind_rows_markdown([row])
     assert "lamp-s2" in table and "30.00" in table and "mono, linear" in table
+    # The bracket is listed shortest exposure first, whatever the order of the keys.
+    assert "| lamp-s2 | full | 31.00 | 30.00 | 29.00 | 26.00 | 24.00 |" in table
 
 
 def test_the_plan_has_six_sessions_over_three_scenes_two_of_them_mono_at_least():
