@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 TORCH_PIN ?= torch==2.13.0
 DEMO_DIR ?= demo-session
 
-.PHONY: install demo test bench bench-quick lint clean
+.PHONY: install demo test bench bench-quick bench-blind lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,11 @@ bench-quick: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python tools/bench.py --publish
+	$(BIN)/python tools/bench_blind.py --publish
+
+# The blind-camera benchmark alone: six randomly drawn sensors, each fitted from its recording.
+bench-blind: $(STAMP)
+	$(BIN)/python tools/bench_blind.py --publish
 
 lint: $(STAMP)
 	$(BIN)/pip install -q ruff

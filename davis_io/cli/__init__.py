@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+import warnings
 
 from davis_io import SeecapError, __version__
+from davis_io.errors import UsageError
 
 __all__ = ["VERBS", "main"]
 
@@ -43,6 +46,9 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, object]]:
         description="DAVIS event camera to sharp HDR 3-D scenes: record, inspect, poses, fit.",
     )
     parser.add_argument("--version", action="version", version=f"seecap {__version__}")
+    parser.add_argument(
+        "--debug", action="store_true", help="show the traceback of a failure instead of a line"
+    )
     verbs = parser.add_subparsers(dest="verb", metavar="VERB")
     modules = {}
     for name, module_name in VERBS.items():
@@ -53,21 +59,57 @@ def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, object]]:
     return parser, modules
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"seecap: warning: {message}", file=sys.stderr)
+
+
+def _failure(error: BaseException, verb: str, debug: bool) -> int:
+    """One line for a failure, its exit code (2 for a usage error, 1 for any other)."""
+    if debug:
+        raise error
+    if isinstance(error, SeecapError):
+        print(f"seecap: error: {verb}: {error}", file=sys.stderr)
+        return EXIT_USAGE if isinstance(error, UsageError) else EXIT_ERROR
+    if isinstance(error, OSError) and error.filename is not None:
+        reason = error.strerror or str(error)
+        print(f"seecap: error: {verb}: {error.filename}: {reason}", file=sys.stderr)
+        return EXIT_ERROR
+    print(
+        f"seecap: error: {verb}: {type(error).__name__}: {error} (this is a bug: run again "
+        "with `seecap --debug ...` for the traceback and report it)",
+        file=sys.stderr,
+    )
+    return EXIT_ERROR
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run ``seecap``; return the process exit code (0 ok, 1 error, 2 usage, 130 Ctrl-C)."""
+    """Run ``seecap``; return the exit code (0 ok, 1 failure, 2 usage error, 130 Ctrl-C).
+
+    Every failure is one line ``seecap: error: VERB: what, where and what to do`` and warnings
+    are ``seecap: warning: ...`` lines; ``--debug`` shows tracebacks instead.
+    """
     parser, modules = _build_parser()
     args = parser.parse_args(argv)
     if args.verb is None:
         parser.print_help()
         return EXIT_USAGE
+    shown = warnings.showwarning
+    if not args.debug:
+        warnings.showwarning = _show_warning
     try:
-        return int(modules[args.verb].run(args) or EXIT_OK)
+        status = int(modules[args.verb].run(args) or EXIT_OK)
+        sys.stdout.flush()  # a reader that has gone shows here, not at the interpreter's exit
+        return status
     except KeyboardInterrupt:
         print("seecap: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except SeecapError as error:
-        print(f"seecap {args.verb}: {error}", file=sys.stderr)
-        return EXIT_ERROR
+    except BrokenPipeError:  # the reader (``| head``) has gone: stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
+    except Exception as error:  # noqa: BLE001 - the one place every failure becomes a line
+        return _failure(error, args.verb, args.debug)
+    finally:
+        warnings.showwarning = shown
 
 
 if __name__ == "__main__":

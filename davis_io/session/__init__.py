@@ -12,7 +12,7 @@ from davis_io.session.manifest import DropCounters, SessionManifest, read_manife
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.store import Session
 from davis_io.session.truth import TRUTH_DIR, Truth, load_truth, save_truth
-from davis_io.session.units import parse_duration_us
+from davis_io.session.units import parse_duration_us, seconds_argument
 from davis_io.types import ColorFilter
 
 __all__ = [
@@ -34,6 +34,7 @@ __all__ = [
     "parse_duration_us",
     "read_manifest",
     "save_truth",
+    "seconds_argument",
     "subdivide",
     "trapezoid_weights",
 ]

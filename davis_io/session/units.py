@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import argparse
 import re
+from collections.abc import Callable
 
 from davis_io.errors import UsageError
 
-__all__ = ["parse_duration_us"]
+__all__ = ["parse_duration_us", "seconds_argument"]
 
-_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|ms|us|µs|m|min|h)?\s*$")
+_DURATION = re.compile(
+    r"^\s*([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|ms|us|µs|m|min|h)?\s*$"
+)
 _SCALE_US = {
     None: 1_000_000,
     "s": 1_000_000,
@@ -42,5 +46,21 @@ def parse_duration_us(text: str, *, what: str = "duration") -> int:
         )
     value_us = round(float(match.group(1)) * _SCALE_US[match.group(2)])
     if value_us <= 0:
-        raise UsageError(f"{what} {text!r} must be at least 1 µs")
+        raise UsageError(f"{what} {text!r} must be > 0 (at least 1 µs)")
     return value_us
+
+
+def seconds_argument(what: str) -> Callable[[str], float]:
+    """An argparse ``type=`` that reads a duration into seconds; bad text is a usage error.
+
+    Args:
+        what: the option's name in the message (``--time-budget``).
+    """
+
+    def seconds(text: str) -> float:
+        try:
+            return parse_duration_us(text, what=what) / 1e6
+        except UsageError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+
+    return seconds

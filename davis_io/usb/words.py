@@ -65,8 +65,10 @@ class WordDecoder:
     """Turns bulk-IN bytes into packets; all state carries over from one call to the next.
 
     Time: device timestamp and wrap words build an unbounded µs count. A timestamp reset zeroes
-    the device count; the decoder then continues its output time line from the last time seen,
-    so output times never go backwards, and marks the reset with a ``TIMESTAMP_RESET`` trigger.
+    every part of it (wrap sum and current time). The first reset is time zero, whatever came
+    before it (start-up left-overs); after a later one the decoder continues its output time
+    line from the last time seen, so output times never go backwards. Each reset is marked with
+    a ``TIMESTAMP_RESET`` trigger.
     APS and IMU data are ignored from the start and after each reset until the next frame start
     or IMU start, as libcaer does.
     """
@@ -76,6 +78,7 @@ class WordDecoder:
         self.stats = DecoderStats()
         self._pending = b""
         self._epoch_us = 0
+        self._origin_set = False
         self._wrap_add_us = 0
         self._device_us = 0
         self._last_row: int | None = None
@@ -184,7 +187,10 @@ class WordDecoder:
         return events
 
     def _timestamp_reset(self, out: _Output) -> None:
-        self._epoch_us += self._device_us
+        # The first reset is time zero: start-up left-overs before it (a wrap word, a stale
+        # timestamp) say nothing of the time since. A later one continues the output time line.
+        self._epoch_us = self._epoch_us + self._device_us if self._origin_set else 0
+        self._origin_set = True
         self._wrap_add_us = 0
         self._device_us = 0
         self.stats.timestamp_resets += 1

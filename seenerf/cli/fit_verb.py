@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from davis_io.session import parse_duration_us
+from davis_io.session import seconds_argument
 from seenerf.cli.options import add_dataclass_options, dataclass_values
 from seenerf.model.config import FitConfig
 
-__all__ = ["FLAGS", "HELP", "add_arguments", "parse_budget_s", "run"]
+__all__ = ["FLAGS", "HELP", "add_arguments", "run"]
 
 HELP = (
     "fit See-NeRF to a session (sensor calibration and poses if missing): sharp HDR renders, "
@@ -20,21 +20,12 @@ FLAGS = {"register_test_views": "--no-registration"}
 """Option strings that differ from the ones derived from :class:`FitConfig`'s field names."""
 
 
-def parse_budget_s(text: str) -> float:
-    """Seconds of a budget: ``10m``, ``1.5h``, ``90s``, ``90`` (see ``parse_duration_us``).
-
-    Raises:
-        UsageError: not a positive duration.
-    """
-    return parse_duration_us(text, what="--time-budget") / 1e6
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the verb's arguments: session and run, then one option per :class:`FitConfig` field."""
     parser.add_argument("session", type=Path, help="session folder")
     parser.add_argument("--run", default=None, help="run folder name under session/fit/")
     parser.add_argument("--fresh", action="store_true", help="start over instead of resuming")
-    add_dataclass_options(parser, FitConfig, seconds=parse_budget_s, flags=FLAGS)
+    add_dataclass_options(parser, FitConfig, seconds=seconds_argument("--time-budget"), flags=FLAGS)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from davis_io.session import seconds_argument
+
 __all__ = ["HELP", "add_arguments", "run"]
 
 HELP = "render a fitted run: HDR EXR + LDR PNGs at chosen exposures, held-out views or a path"
@@ -15,11 +17,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("run_dir", type=Path, metavar="RUN", help="run folder session/fit/<run>")
     parser.add_argument(
         "--exposure",
-        type=float,
+        type=seconds_argument("--exposure"),
         nargs="+",
         default=(),
         metavar="SECONDS",
-        help="LDR exposures in seconds (default: the five of the bracket)",
+        help="LDR exposures: seconds (0.01), 10ms or 10000us (default: the five of the bracket)",
     )
     parser.add_argument(
         "--path",
@@ -28,7 +30,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="camera path: orbit, a transforms.json or a .npy of (N, 4, 4) OpenCV "
         "poses (default: the held-out views)",
     )
-    parser.add_argument("--out", default="path", help="output folder name inside the run")
+    parser.add_argument(
+        "--out",
+        default=None,
+        help="output folder inside the run (default: held-out, or path with --path); the fit's "
+        "own renders/ are never overwritten",
+    )
 
 
 def run(args: argparse.Namespace) -> int:

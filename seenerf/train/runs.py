@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from seenerf.data.arrays import TrainingData
+from seenerf.data.frames import test_poses_in_fit_frame
 from seenerf.data.session import load_training_data
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import OPENCV_TO_OPENGL, write_json
@@ -103,15 +104,20 @@ def render_run(
     run_dir: Path | str,
     exposures_s: tuple[float, ...] = (),
     path: str | None = None,
-    out_name: str = "path",
+    out_name: str | None = None,
 ) -> Path:
-    """Render a run along a camera path (``orbit``, a file, or the held-out views if None)."""
+    """Render a run along a camera path (``orbit``, a file, or the held-out views if None).
+
+    The views go to ``run_dir/out_name`` (default ``held-out`` or ``path``), never into the
+    fit's own ``renders/``.
+    """
     run = open_run(run_dir)
     if path is None:
-        render_outputs(run.model, run.data, run.config, run.run_dir)
-        return run.run_dir / "renders"
-    poses = orbit_poses(run.data) if path == "orbit" else read_path(Path(path))
+        poses, _ = test_poses_in_fit_frame(run.data, run.model.variant.supervision.truth_hdr)
+    else:
+        poses = orbit_poses(run.data) if path == "orbit" else read_path(Path(path))
     exposures = exposures_s or run.config.exposures_s or PAPER_EXPOSURES_S
+    out_name = out_name or ("held-out" if path is None else "path")
     views = render_views(
         run.model,
         poses,
@@ -126,7 +132,7 @@ def render_run(
         out_dir,
         run.data.intrinsics,
         run.data.image_size,
-        {"seecap_variant": run.config.variant, "seecap_path": str(path)},
+        {"seecap_variant": run.config.variant, "seecap_path": str(path or "held-out views")},
     )
     return out_dir
 

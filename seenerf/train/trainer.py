@@ -32,6 +32,11 @@ __all__ = ["TrainSummary", "Trainer"]
 GRID_WARMUP_STEPS = 50
 """Steps before the first occupancy refresh (the field is still blank before)."""
 
+PLATEAU_FROM_PROGRESS = 0.5
+"""Share of the run (steps or budget) before a plateau may stop it: a 10-minute fit of the
+emulated room stopped at 44 % with the rate still 2.5x its final value (5,000 steps; the held-out
+score had not gained 0.05 dB in 8 evaluations while it wobbled)."""
+
 
 @dataclass
 class TrainSummary:
@@ -305,7 +310,16 @@ class Trainer:
         else:
             self.evals_since_best += 1
         self._checkpoint()
-        return 0 < self.preset.patience <= self.evals_since_best
+        return self.plateaued()
+
+    def plateaued(self) -> bool:
+        """The held-out score has not risen for ``patience`` evaluations in the run's second half.
+
+        While the rate is still high the score wobbles by more than a plateau's margin, so a run
+        stops early only once half its schedule (steps or budget) is behind it.
+        """
+        settled = self.progress() >= PLATEAU_FROM_PROGRESS
+        return settled and 0 < self.preset.patience <= self.evals_since_best
 
     def _checkpoint(self) -> None:
         if self.run_dir is not None:

@@ -84,7 +84,18 @@ def test_textureless_session_fails_with_advice(textureless_session, capsys):
         estimate_poses(textureless_session, b=4)
     assert main(["poses", str(textureless_session)]) == 1
     err = capsys.readouterr().err
-    assert "seecap poses:" in err and "Traceback" not in err and "texture" in err
+    assert "seecap: error: poses:" in err and "Traceback" not in err and "texture" in err
+
+
+def test_a_sensor_that_cannot_be_measured_is_one_warning_line(textureless_session, capsys):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        assert main(["poses", str(textureless_session)]) == 1
+    err = capsys.readouterr().err
+    assert "seecap: warning: the sensor could not be measured" in err
+    assert "UserWarning" not in err and "Traceback" not in err
 
 
 def test_read_intrinsics(tmp_path):

@@ -6,21 +6,23 @@ import sys
 import pytest
 
 from davis_io.cli import VERBS
-from davis_io.errors import UsageError
+from davis_io.session import seconds_argument
 from seenerf.cli import fit_verb
-from seenerf.cli.fit_verb import parse_budget_s
 from seenerf.eval.scores import format_scores
 from seenerf.model.config import FitConfig
 from seenerf.train import fit_data
 
 
 def test_budget_parsing():
-    assert parse_budget_s("10m") == 600
-    assert parse_budget_s("1.5h") == 5400
-    assert parse_budget_s("90") == 90
-    assert parse_budget_s("250ms") == pytest.approx(0.25)
-    with pytest.raises(UsageError):
-        parse_budget_s("soon")
+    budget = seconds_argument("--time-budget")
+    assert budget("10m") == 600
+    assert budget("1.5h") == 5400
+    assert budget("90") == 90
+    assert budget("250ms") == pytest.approx(0.25)
+    with pytest.raises(argparse.ArgumentTypeError, match="'soon' is not a duration"):
+        budget("soon")
+    with pytest.raises(argparse.ArgumentTypeError, match="must be > 0"):
+        budget("-1")
 
 
 def test_verbs_are_registered_and_import_without_torch():

@@ -167,6 +167,17 @@ def test_a_budget_without_a_step_count_runs_past_the_presets_steps(tiny_scene):
     assert _field_lr_at(trainer, 3 * steps, 40.0) == pytest.approx(base * 0.1 ** (steps / decay))
 
 
+def test_a_plateau_stops_a_run_only_in_the_second_half_of_its_schedule(tiny_scene):
+    trainer = Trainer(tiny_scene, _config(steps=1000), log=lambda line: None)
+    trainer.evals_since_best = trainer.preset.patience
+    trainer.summary.steps = 400  # the rate has not fallen far yet: keep going
+    assert not trainer.plateaued()
+    trainer.summary.steps = 500
+    assert trainer.plateaued()
+    trainer.evals_since_best -= 1  # still rising within the patience
+    assert not trainer.plateaued()
+
+
 def test_progress_line_reports_losses_psnr_rate_and_eta(tiny_scene):
     lines = []
     trainer = Trainer(tiny_scene, _config(steps=4), log=lines.append)

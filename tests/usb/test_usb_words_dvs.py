@@ -49,13 +49,24 @@ def test_big_wrap_past_31_bits_keeps_counting():
     assert packet.events["t"].tolist() == [2**31 + 1]
 
 
-def test_timestamp_reset_continues_output_time_and_marks_it():
-    # t = 0x7000 = 28672, reset (0x0001), then device time restarts: 0x8005 -> device 5 µs,
-    # output 28672 + 5 = 28677 (the output time line never goes backwards).
-    packet, decoder = decode(0x8000 | 0x7000, 0x1002, 0x3001, 0x0001, 0x8005, 0x3004)
-    assert packet.events.tolist() == [(28672, 1, 2, 1), (28677, 4, 2, 1)]
-    assert packet.triggers.tolist() == [(28672, TriggerKind.TIMESTAMP_RESET)]
+def test_first_timestamp_reset_is_time_zero_whatever_came_before():
+    # Start-up left-overs: a wrap word (0x7001: +32768 µs) and a timestamp 0x8100 (256 µs past
+    # it); then the reset (0x0001) and device time 0x8005: 5 µs after the reset, not 32768 + 5.
+    packet, decoder = decode(0x7001, 0x8100, 0x0001, 0x8005, 0x1002, 0x3004)
+    assert packet.events.tolist() == [(5, 4, 2, 1)]
+    assert packet.triggers.tolist() == [(0, TriggerKind.TIMESTAMP_RESET)]
     assert decoder.stats.timestamp_resets == 1
+
+
+def test_a_later_reset_zeroes_the_device_time_and_continues_the_output_time_line():
+    # Reset at start, t = 0x7000 = 28672, a wrap word (+32768 µs: 32768), reset mid-stream,
+    # then device 5 µs: output 32768 + 5 = 32773 (the line never goes backwards; the wrap sum
+    # and current time are zeroed, so the second wrap word counts from the reset).
+    words = (0x0001, 0x8000 | 0x7000, 0x1002, 0x3001, 0x7001, 0x0001, 0x8005, 0x3004, 0x7001)
+    packet, decoder = decode(*words, 0x8003, 0x3005)
+    assert packet.events.tolist() == [(28672, 1, 2, 1), (32773, 4, 2, 1), (65539, 5, 2, 1)]
+    assert packet.triggers["t"].tolist() == [0, 32768]
+    assert decoder.stats.timestamp_resets == 2
 
 
 def test_non_monotonic_time_is_counted_not_corrected():
