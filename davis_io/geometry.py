@@ -24,7 +24,9 @@ __all__ = [
     "c2w_from_w2c",
     "colmap_from_opencv_intrinsics",
     "opencv_from_colmap_intrinsics",
+    "OPENCV_TO_OPENGL",
     "interpolate_poses",
+    "nerfstudio_transforms",
     "mean_rotation",
     "rotation_error_deg",
     "umeyama",
@@ -225,3 +227,56 @@ def interpolate_poses(
         :, None
     ] * known_c2w[upper, :3, 3]
     return out
+
+
+OPENCV_TO_OPENGL = np.diag([1.0, -1.0, -1.0, 1.0])
+"""Right-multiply an OpenCV camera-to-world (x right, y down, z forward) to get OpenGL axes (x
+right, y up, z backward), the convention of nerfstudio's and instant-ngp's ``transforms.json``."""
+
+NERFSTUDIO_PIXEL_OFFSET = 0.5
+"""nerfstudio and instant-ngp put pixel ``i``'s centre at ``i + 0.5``; the session at ``i``."""
+
+
+def nerfstudio_transforms(
+    c2w: np.ndarray,
+    intrinsics: np.ndarray,
+    distortion: np.ndarray,
+    image_size: tuple[int, int],
+    file_paths: list[str],
+) -> dict:
+    """A ``transforms.json`` that nerfstudio's and instant-ngp's loaders read.
+
+    Camera-to-world in OpenGL axes, the principal point moved to their pixel convention (pixel
+    centres at +0.5), the OpenCV model with its distortion keys (k1, k2, p1, p2; zero when the
+    session has none).
+
+    Args:
+        c2w: ``(N, 4, 4)`` OpenCV camera-to-world.
+        intrinsics: ``(fx, fy, cx, cy)``, pixel centres at integers.
+        distortion: OpenCV coefficients ``k1, k2, p1, p2, ...`` (may be empty).
+        image_size: ``(height, width)``.
+        file_paths: each view's image, relative to the JSON file.
+    """
+    fx, fy, cx, cy = (float(v) for v in intrinsics)
+    coefficients = np.zeros(4)
+    known = np.asarray(distortion, float).ravel()[:4]
+    coefficients[: len(known)] = known
+    frames = [
+        {"file_path": name, "transform_matrix": (pose @ OPENCV_TO_OPENGL).tolist()}
+        for name, pose in zip(file_paths, np.asarray(c2w, float), strict=True)
+    ]
+    k1, k2, p1, p2 = (float(c) for c in coefficients)
+    return {
+        "camera_model": "OPENCV",
+        "fl_x": fx,
+        "fl_y": fy,
+        "cx": cx + NERFSTUDIO_PIXEL_OFFSET,
+        "cy": cy + NERFSTUDIO_PIXEL_OFFSET,
+        "w": int(image_size[1]),
+        "h": int(image_size[0]),
+        "k1": k1,
+        "k2": k2,
+        "p1": p1,
+        "p2": p2,
+        "frames": frames,
+    }

@@ -103,3 +103,30 @@ def test_a_mono_session_without_truth_renders_mono_everywhere(twins):
     grey = [cv2.imread(str(p), cv2.IMREAD_UNCHANGED).ndim for p in orbit.rglob("*.png")]
     assert grey and set(grey) == {2}
     assert "hdr" not in result.metrics  # nothing to score without truth: renders only
+
+
+def test_nerfstudio_export_reads_back_in_its_own_conventions(twins, tmp_path):
+    from davis_io.poses.nerfstudio import export_nerfstudio
+
+    _, camera = twins
+    path = export_nerfstudio(camera, tmp_path / "ns")
+    payload = json.loads(path.read_text())
+    for key in ("camera_model", "fl_x", "fl_y", "cx", "cy", "w", "h", "k1", "k2", "p1", "p2"):
+        assert key in payload
+    assert payload["camera_model"] == "OPENCV" and (payload["w"], payload["h"]) == (173, 130)
+    with Session.open(camera) as session:
+        poses = session.poses(4)
+    assert len(payload["frames"]) == int(poses.registered.sum())
+    fx, fy, cx, cy = poses.intrinsics
+    point = np.array([0.3, -0.2, 4.0, 1.0])  # in front of the first camera, in its frame
+    first = payload["frames"][0]
+    frame, index = (int(p) for p in first["file_path"][len("images/") : -len(".png")].split("_"))
+    world = poses.c2w[frame, index] @ point
+    # nerfstudio: OpenGL camera axes (y up, z backward), pixel i's centre at i + 0.5.
+    camera_gl = np.linalg.inv(np.array(first["transform_matrix"])) @ world
+    u = payload["fl_x"] * camera_gl[0] / -camera_gl[2] + payload["cx"] - 0.5
+    v = payload["fl_y"] * -camera_gl[1] / -camera_gl[2] + payload["cy"] - 0.5
+    # The session: OpenCV axes, pixel centres at integers.
+    assert (u, v) == pytest.approx((fx * 0.3 / 4.0 + cx, fy * -0.2 / 4.0 + cy))
+    image = cv2.imread(str(path.parent / first["file_path"]), cv2.IMREAD_UNCHANGED)
+    assert image.shape == (130, 173)  # monochrome latent frames stay grey

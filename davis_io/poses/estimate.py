@@ -15,6 +15,7 @@ from davis_io.errors import UsageError
 from davis_io.geometry import interpolate_poses
 from davis_io.poses.colmap import ColmapError, SparseModel
 from davis_io.poses.latent import calibrated_response, latent_images, sharpness
+from davis_io.poses.nerfstudio import latent_frame_name
 from davis_io.poses.recovery import reconstruct_with_recovery
 from davis_io.session import DEFAULT_BINS, Session, SessionPoses
 
@@ -108,7 +109,7 @@ def _write_latent_frames(session, bins, response, image_dir, progress):
             session.color_filter,
             response,
         )
-        view = [f"{i:04d}_{k}.png" for k in range(len(images))]
+        view = [latent_frame_name(i, k) for k in range(len(images))]
         for name, image in zip(view, images, strict=True):
             bgr = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
             cv2.imwrite(str(image_dir / name), bgr)

@@ -2,7 +2,8 @@
 
 The EDI runs on the frame as recorded (a colour sensor's raw mosaic, each mosaic pixel with its
 own event map), in the linear domain when the response curve is known and on the normalised
-image otherwise; only then are the latent mosaics demosaiced with OpenCV for COLMAP.
+image otherwise; the latent exposures are then gamma-encoded as a display shows them, whatever
+the sensor's own response, and only then are the latent mosaics demosaiced for COLMAP.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from davis_io.types import ColorFilter, Frame
 __all__ = [
     "ResponseCurve",
     "calibrated_response",
+    "display_encoding",
     "latent_images",
     "normalised_image",
     "sharpness",
@@ -45,6 +47,11 @@ class ResponseCurve:
     def to_values(self, exposure: np.ndarray) -> np.ndarray:
         """Linear exposure to normalised pixel values, clipped to the table's range."""
         return np.interp(exposure, self.exposure, self.value)
+
+
+_GAMMA = 2.2
+_WHITE_PERCENTILE = 99.5
+"""The blurry frame's exposure at this percentile is white in its latent frames."""
 
 
 def calibrated_response(calibration: SensorCalibration) -> ResponseCurve | None:
@@ -107,10 +114,20 @@ def latent_images(
     if response is None:
         latent = edi_latent_frames(blurry, counts, weights, threshold)
     else:
-        # Latent exposures beyond the table saturate to its last value, like the sensor would.
-        linear = edi_latent_frames(response.to_linear(blurry), counts, weights, threshold)
-        latent = response.to_values(linear)
+        exposure = response.to_linear(blurry)
+        linear = edi_latent_frames(exposure, counts, weights, threshold)
+        latent = display_encoding(linear, float(np.percentile(exposure, _WHITE_PERCENTILE)))
     return [_to_8bit(image, color_filter) for image in latent]
+
+
+def display_encoding(linear: np.ndarray, white: float) -> np.ndarray:
+    """Linear exposure as a display would show it: ``(linear / white) ** (1 / 2.2)`` in [0, 1].
+
+    Feature detection wants the same image whatever the camera's response: a raw DAVIS frame
+    is linear, so mid-grey reads a tenth of full scale and SIFT finds little in it; through the
+    gamma of a display every sensor's latent frames look alike.
+    """
+    return np.clip(np.maximum(linear, 0.0) / max(white, 1e-12), 0.0, 1.0) ** (1 / _GAMMA)
 
 
 def sharpness(image: np.ndarray) -> float:

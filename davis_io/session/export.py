@@ -1,19 +1,19 @@
-"""A session as a packet stream again, and its export to AEDAT 4.0."""
+"""A session as a packet stream again (what an export to a recording format reads)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from pathlib import Path
 
 import numpy as np
 
 from davis_io.session.store import Session
 from davis_io.types import Packet, SourceInfo
 
-__all__ = ["export_aedat4", "session_packets", "session_source_info"]
+__all__ = ["DAVIS_BIT_DEPTH", "session_packets", "session_source_info"]
 
 _CHUNK_EVENTS = 1 << 20
-_DAVIS_BIT_DEPTH = 10
+DAVIS_BIT_DEPTH = 10
+"""ADC bits of a DAVIS frame."""
 
 
 def session_source_info(session: Session) -> SourceInfo:
@@ -57,23 +57,3 @@ def session_packets(session: Session, *, chunk_events: int = _CHUNK_EVENTS) -> I
             triggers=triggers[next_trigger:trigger_stop],
         )
         next_frame, next_imu, next_trigger = frame_stop, imu_stop, trigger_stop
-
-
-def export_aedat4(session_path: Path | str, out_path: Path | str) -> Path:
-    """Write a session's events, frames, IMU samples and triggers to an AEDAT 4.0 file.
-
-    Returns:
-        The file written.
-    """
-    from davis_io.aedat import write_aedat4
-
-    with Session.open(session_path) as session:
-        bit_depth = _DAVIS_BIT_DEPTH
-        if session.frame_count and session.frame(0).image.dtype == np.uint16:
-            bit_depth = session.frame(0).bit_depth
-        return write_aedat4(
-            session_packets(session),
-            out_path,
-            info=session_source_info(session),
-            frame_bit_depth=bit_depth,
-        )

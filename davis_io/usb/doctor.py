@@ -5,6 +5,8 @@ from __future__ import annotations
 import importlib.util
 import os
 import shutil
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -74,11 +76,45 @@ def _module_check(name: str, purpose: str) -> Check:
     )
 
 
+_TORCH_DEVICE = (
+    "import torch; print(torch.__version__, torch.cuda.is_available(), "
+    "torch.cuda.device_count(), torch.version.cuda)"
+)
+"""What torch itself says of CUDA, asked in a child process (davis_io never imports torch)."""
+
+
+def _torch_cuda() -> tuple[bool, str]:
+    """Whether torch sees a CUDA device, and what it said."""
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", _TORCH_DEVICE],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=True,
+        )
+    except (OSError, subprocess.SubprocessError) as error:
+        return False, f"torch could not be asked ({error})"
+    version, available, count, cuda = done.stdout.split()
+    if available == "True":
+        return True, f"torch {version} sees {count} CUDA device(s) (CUDA {cuda})"
+    built = "a CPU build" if cuda == "None" else f"built for CUDA {cuda}"
+    return False, f"torch {version} ({built}) sees no CUDA device"
+
+
 def _compute_check() -> Check:
     gpus = sorted(_NVIDIA_GPUS.iterdir()) if _NVIDIA_GPUS.is_dir() else []
+    usable, said = _torch_cuda()
+    if usable:
+        return Check("compute", True, f"{said}; fitting uses the GPU")
     if gpus:
-        return Check("compute", True, f"{len(gpus)} NVIDIA GPU(s) found; fitting uses the GPU")
-    return Check("compute", True, f"no NVIDIA GPU; fitting runs on {os.cpu_count()} CPU cores")
+        return Check(
+            "compute",
+            False,
+            f"{len(gpus)} NVIDIA GPU(s) in the driver, but {said}: install a CUDA build of "
+            "torch (see the README's Install section) or fit with --device cpu",
+        )
+    return Check("compute", True, f"{said}; fitting runs on {os.cpu_count()} CPU cores")
 
 
 def _disk_check(path: Path) -> Check:

@@ -8,8 +8,8 @@ import numpy as np
 import torch
 
 from seenerf.data.arrays import TrainingData
-from seenerf.eval.export import crf_plot
 from seenerf.eval.metrics import align_channel_scale
+from seenerf.eval.plots import crf_plot
 from seenerf.eval.views import RenderedViews
 from seenerf.model.model import SeeNerfModel
 from seenerf.sensors.rgb_crf import TabulatedCrf

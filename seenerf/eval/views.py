@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from davis_io.geometry import nerfstudio_transforms
 from seenerf.eval.export import (
     tone_mapped_preview,
-    transforms_json,
     write_exr,
     write_json,
     write_png,
@@ -131,5 +131,6 @@ def write_views(
             write_png(run_dir / "renders" / "ldr" / f"{exposure:g}" / f"{name}.png", images[index])
         names.append(f"renders/hdr/{name}.png")
     write_json(
-        run_dir / "transforms.json", transforms_json(views.c2w, intrinsics, image_size, names)
+        run_dir / "transforms.json",
+        nerfstudio_transforms(views.c2w, intrinsics, np.zeros(0), image_size, names),
     )

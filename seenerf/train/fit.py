@@ -8,12 +8,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import torch
+
 from davis_io.session import DEFAULT_BINS, Session
 from seenerf.data.arrays import TrainingData
 from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
+from seenerf.eval.plots import training_curves
 from seenerf.model.config import FitConfig, save_config
 from seenerf.model.variants import get_variant
 from seenerf.train.trainer import Trainer, TrainSummary
@@ -46,6 +49,7 @@ def fit_session(
     fresh: bool = False,
     log: Callable[[str], None] = print,
     spent_s: float = 0.0,
+    on_step: Callable[[Trainer], None] | None = None,
 ) -> FitResult:
     """Fit a calibrated session with poses into ``session/fit/<run>/``.
 
@@ -57,6 +61,7 @@ def fit_session(
         fresh: discard an existing checkpoint of this run instead of resuming it.
         log: receives progress lines.
         spent_s: seconds of the time budget already spent (calibration and poses).
+        on_step: called with the trainer after every training step (a progress bar).
     """
     config = config.validate()
     session_dir = Path(session_dir)
@@ -70,7 +75,18 @@ def fit_session(
     )
     run_dir = session_dir / "fit" / (run_name or f"{config.preset}-{config.variant}")
     spent_s += time.perf_counter() - start
-    return fit_data(data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s)
+    return fit_data(data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s, on_step=on_step)
+
+
+def _logged_to(path: Path, log: Callable[[str], None]) -> Callable[[str], None]:
+    """``log`` that also appends each line, time-stamped, to ``path``."""
+
+    def both(line: str) -> None:
+        with open(path, "a", encoding="utf-8") as file:
+            file.write(f"{time.strftime('%Y-%m-%d %H:%M:%S')}  {line}\n")
+        log(line)
+
+    return both
 
 
 def resolved_settings(trainer: Trainer) -> dict:
@@ -95,12 +111,23 @@ def fit_data(
     fresh: bool = False,
     log: Callable[[str], None] = print,
     spent_s: float = 0.0,
+    on_step: Callable[[Trainer], None] | None = None,
 ) -> FitResult:
-    """Train on ``data`` in ``run_dir`` (resuming a checkpoint unless ``fresh``), render, score."""
+    """Train on ``data`` in ``run_dir`` (resuming a checkpoint unless ``fresh``), render, score.
+
+    Every line logged also goes to ``run_dir/log.txt``.
+    """
     if fresh and run_dir.exists():
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
-    trainer = Trainer(data, config, run_dir, log, spent_s)
+    log = _logged_to(run_dir / "log.txt", log)
+    trainer = Trainer(data, config, run_dir, log, spent_s, on_step)
+    threads = torch.get_num_threads() if trainer.device == "cpu" else 0
+    log(
+        f"training {config.preset} {config.variant} on {trainer.device}"
+        + (f" ({threads} threads)" if threads else "")
+        + f", {data.num_frames} frames, b = {data.num_bins}"
+    )
     travel_px = median_travel_px(data)
     log(
         f"image motion between latent poses: median {travel_px:.1f} px at the mean depth; "
@@ -112,6 +139,7 @@ def fit_data(
         f"trained {summary.steps} steps in {summary.elapsed_s:.0f} s ({summary.stopped}); "
         f"{summary.rays_per_s:.0f} rays/s"
     )
+    training_curves(run_dir / "training.png", summary.history)
     metrics = render_outputs(trainer.model, data, config, run_dir)
     metrics["training"] = {
         "steps": summary.steps,

@@ -8,11 +8,12 @@ from pathlib import Path
 
 import numpy as np
 
+from davis_io.geometry import OPENCV_TO_OPENGL
 from seenerf.data.arrays import TrainingData
 from seenerf.data.frames import test_poses_in_fit_frame
 from seenerf.data.session import load_training_data
 from seenerf.errors import CheckpointError
-from seenerf.eval.export import OPENCV_TO_OPENGL, write_json
+from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
 from seenerf.eval.views import PAPER_EXPOSURES_S, render_views, write_views
 from seenerf.model.config import FitConfig, load_config

@@ -72,6 +72,7 @@ class Trainer:
         run_dir: folder for the checkpoint (None: no checkpoints).
         log: receives every progress line.
         spent_s: seconds already spent by the caller (poses) against the time budget.
+        on_step: ``on_step(trainer)`` after every step (a progress bar), or None.
     """
 
     def __init__(
@@ -81,8 +82,10 @@ class Trainer:
         run_dir: Path | None = None,
         log: Callable[[str], None] = print,
         spent_s: float = 0.0,
+        on_step: Callable[[Trainer], None] | None = None,
     ):
         self.data, self.config, self.run_dir, self.log = data, config.validate(), run_dir, log
+        self.on_step = on_step
         if config.threads > 0:
             torch.set_num_threads(config.threads)
         self.device = resolve_device(config.device)
@@ -150,6 +153,8 @@ class Trainer:
             rays += self._step()
             self.summary.steps += 1
             self.summary.elapsed_s = base_elapsed + time.perf_counter() - start
+            if self.on_step is not None:
+                self.on_step(self)
             if self._budget_left() <= 0:
                 self.summary.stopped = "budget"
                 break

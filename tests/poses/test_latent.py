@@ -39,14 +39,22 @@ def test_response_curve_runs_the_edi_on_linear_values():
     exposure = np.linspace(0, 4, 401)
     curve = ResponseCurve(exposure, np.sqrt(exposure / 4))  # value = sqrt(x / 4)
     assert curve.to_linear(np.array([0.5]))[0] == pytest.approx(1.0, abs=1e-3)
-    # Blurry value 0.5 -> linear 1; one bin doubling: L_0 = 1 / 1.5, L_1 = 4/3 (linear)
-    # -> values sqrt(1/6) = 0.408 and sqrt(1/3) = 0.577, i.e. 104 and 147 in 8 bits.
-    image = np.full((1, 1), 0.5 * 255, np.float64).round().astype(np.uint8)
-    counts = np.full((1, 1, 1), np.log(2) / 0.3)
+    # Blurry values 0.5 and 1 -> linear 1 and 4; the first pixel's one bin doubles it:
+    # L_0 = 1 / 1.5, L_1 = 4/3 (linear). White is the blurry exposures' 99.5th percentile,
+    # 1 + 0.995 * 3 = 3.985, and the display gamma 2.2 gives (2/3 / 3.985) ** (1/2.2) = 0.444
+    # and (4/3 / 3.985) ** (1/2.2) = 0.608: 113 and 155 in 8 bits, whatever the curve.
+    image = np.array([[0.5, 1.0]]) * 255
+    counts = np.array([[[np.log(2) / 0.3, 0.0]]])
     first, last = latent_images(
-        frame_of(image, 8), counts, [0.5, 0.5], 0.3, ColorFilter.MONO, curve
+        frame_of(image.round().astype(np.uint8), 8),
+        counts,
+        [0.5, 0.5],
+        0.3,
+        ColorFilter.MONO,
+        curve,
     )
-    assert abs(int(first[0, 0]) - 104) <= 1 and abs(int(last[0, 0]) - 147) <= 1
+    assert abs(int(first[0, 0]) - 113) <= 1 and abs(int(last[0, 0]) - 155) <= 1
+    assert int(first[0, 1]) == int(last[0, 1]) == 255  # no events: the brightest stays white
 
 
 def test_sharpness_prefers_the_sharp_image():

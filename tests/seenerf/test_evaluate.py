@@ -133,7 +133,7 @@ def test_residual_blur_finds_the_blur_of_a_render():
 def test_crf_plot_draws_only_the_curves_in_use(tmp_path):
     import cv2
 
-    from seenerf.eval.export import crf_plot
+    from seenerf.eval.plots import crf_plot
 
     x = np.linspace(-6.0, 4.0, 50)
     curve = 1.0 / (1.0 + np.exp(-x))
@@ -144,6 +144,21 @@ def test_crf_plot_draws_only_the_curves_in_use(tmp_path):
     mono = cv2.imread(str(tmp_path / "mono.png")).astype(int)
     rgb = cv2.imread(str(tmp_path / "rgb.png")).astype(int)
     assert _coloured_pixels(mono) == 0 and _coloured_pixels(rgb) > 500
+
+
+def test_training_curves_are_drawn_from_the_history(tmp_path):
+    import cv2
+
+    from seenerf.eval.plots import training_curves
+
+    history = [
+        {"step": s, "val_psnr": 20 + s / 100, "ldr": 1 / s, "events": 2 / s} for s in (1, 50, 100)
+    ]
+    training_curves(tmp_path / "training.png", history)
+    image = cv2.imread(str(tmp_path / "training.png"))
+    assert image is not None and image.shape[0] > 200 and _coloured_pixels(image) > 100
+    training_curves(tmp_path / "empty.png", [])
+    assert not (tmp_path / "empty.png").exists()
 
 
 def _coloured_pixels(image):

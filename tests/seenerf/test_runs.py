@@ -3,8 +3,8 @@ import json
 import numpy as np
 import pytest
 
+from davis_io.geometry import OPENCV_TO_OPENGL, nerfstudio_transforms
 from seenerf.errors import CheckpointError
-from seenerf.eval.export import OPENCV_TO_OPENGL, transforms_json
 from seenerf.train.runs import open_run, orbit_poses, read_path
 
 
@@ -20,7 +20,9 @@ def test_orbit_circles_the_training_cameras(tiny_scene):
 def test_transforms_json_round_trips_as_a_camera_path(tmp_path):
     c2w = np.tile(np.eye(4), (2, 1, 1))
     c2w[1, :3, 3] = [1.0, 2.0, 3.0]
-    payload = transforms_json(c2w, np.array([10.0, 10.0, 4.0, 3.0]), (6, 8), ["a.png", "b.png"])
+    payload = nerfstudio_transforms(
+        c2w, np.array([10.0, 10.0, 4.0, 3.0]), np.zeros(0), (6, 8), ["a.png", "b.png"]
+    )
     # OpenGL axes flip y and z of the camera
     assert payload["frames"][0]["transform_matrix"][1][1] == -1.0
     path = tmp_path / "transforms.json"

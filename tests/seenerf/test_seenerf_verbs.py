@@ -66,7 +66,7 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
         seen["prepared"] = (session, b)
         return 12.5
 
-    def fake_fit_session(session, config, run_name=None, fresh=False, spent_s=0.0):
+    def fake_fit_session(session, config, run_name=None, fresh=False, spent_s=0.0, **progress):
         seen["config"], seen["spent_s"] = config, spent_s
         raise SystemExit(0)
 
@@ -81,3 +81,14 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
     assert seen["spent_s"] == 12.5  # the budget counts the preparation
     assert seen["config"].threshold == pytest.approx(0.35)
     assert parser.parse_args([str(tmp_path)]).threshold == 0.0  # 0: measured
+    # A run's saved config.json fits again as it was, whatever the other options say.
+    from seenerf.model.config import save_config
+
+    save_config(FitConfig(threshold=0.25, seed=7), tmp_path / "config.json")
+    with pytest.raises(SystemExit):
+        fit_verb.run(
+            parser.parse_args(
+                [str(tmp_path), "--config", str(tmp_path / "config.json"), "--seed", "1"]
+            )
+        )
+    assert (seen["config"].threshold, seen["config"].seed) == (0.25, 7)

@@ -48,7 +48,7 @@ def test_record_replay_prints_applied_and_measured_exposure(replay_session):
 def test_existing_session_needs_overwrite(replay_session, aestream_aedat4, capsys):
     folder, _ = replay_session
     code = main(["record", "--replay", str(aestream_aedat4), "--out", str(folder)])
-    assert code == 1 and "--overwrite" in capsys.readouterr().err
+    assert code == 2 and "--overwrite" in capsys.readouterr().err  # a usage error
     code = main(["record", "--replay", str(aestream_aedat4), "--out", str(folder), "--overwrite"])
     assert code == 0
 
@@ -66,7 +66,7 @@ def test_no_camera_explains_what_to_do(tmp_path, monkeypatch, capsys):
     assert "no DAVIS camera found" in error and "--replay" in error and "--emulate" in error
     assert not (tmp_path / "s").exists()
     code = main(["record", "--out", str(tmp_path / "s")])
-    assert code == 1 and "needs --exposure" in capsys.readouterr().err
+    assert code == 2 and "needs --exposure" in capsys.readouterr().err  # a usage error
 
 
 def test_frames_and_duration_exclude_each_other(tmp_path):
