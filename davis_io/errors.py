@@ -13,7 +13,14 @@ __all__ = [
 
 
 class SeecapError(Exception):
-    """Base of every error raised on purpose by seecap (caught by the ``seecap`` CLI)."""
+    """Base of every error raised on purpose by seecap (caught by the ``seecap`` CLI).
+
+    Attributes:
+        exit_status: the process exit status the CLI gives it, or None for the usual (1, or 2
+            for a usage error).
+    """
+
+    exit_status: int | None = None
 
 
 class DavisIOError(SeecapError):

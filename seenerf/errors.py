@@ -7,7 +7,14 @@ from typing import TypeVar
 
 from davis_io import SeecapError
 
-__all__ = ["CheckpointError", "ConfigError", "SeeNerfError", "TrainingDataError", "by_name"]
+__all__ = [
+    "CheckpointError",
+    "ConfigError",
+    "SeeNerfError",
+    "TrainingDataError",
+    "TrainingStopped",
+    "by_name",
+]
 
 T = TypeVar("T")
 
@@ -26,6 +33,20 @@ class TrainingDataError(SeeNerfError):
 
 class CheckpointError(SeeNerfError):
     """A run folder or checkpoint is missing or does not match its configuration."""
+
+
+class TrainingStopped(SeeNerfError):
+    """Training was asked to stop (SIGTERM, Ctrl-C) and saved a checkpoint at its last step.
+
+    Args:
+        message: what happened and how to resume.
+        signal_number: the signal that asked; the exit status is 128 + it, as for a process
+            the signal ended.
+    """
+
+    def __init__(self, message: str, signal_number: int):
+        super().__init__(message)
+        self.exit_status = 128 + signal_number
 
 
 def by_name(table: Mapping[str, T], what: str, name: str) -> T:

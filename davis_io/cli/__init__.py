@@ -69,6 +69,8 @@ def _failure(error: BaseException, verb: str, debug: bool) -> int:
         raise error
     if isinstance(error, SeecapError):
         print(f"seecap: error: {verb}: {error}", file=sys.stderr)
+        if error.exit_status is not None:
+            return error.exit_status
         return EXIT_USAGE if isinstance(error, UsageError) else EXIT_ERROR
     if isinstance(error, OSError) and error.filename is not None:
         reason = error.strerror or str(error)

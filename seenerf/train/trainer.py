@@ -14,6 +14,7 @@ import torch
 
 from seenerf.data.arrays import TrainingData
 from seenerf.data.batching import FrameSampler, OracleSampler
+from seenerf.errors import TrainingStopped
 from seenerf.eval.metrics import psnr
 from seenerf.model.config import FitConfig
 from seenerf.train.builder import build_model, resolve_device
@@ -26,11 +27,16 @@ from seenerf.train.losses import (
     oracle_hdr_loss,
     total_loss,
 )
+from seenerf.train.stopping import StopRequest, stop_requests
 
 __all__ = ["TrainSummary", "Trainer"]
 
 GRID_WARMUP_STEPS = 50
 """Steps before the first occupancy refresh (the field is still blank before)."""
+
+CHECKPOINT_EVERY_S = 60.0
+"""Seconds of training between checkpoints besides those at every evaluation: a killed fit
+loses at most this much."""
 
 PLATEAU_FROM_PROGRESS = 0.5
 """Share of the run (steps or budget) before a plateau may stop it: a 10-minute fit of the
@@ -143,18 +149,40 @@ class Trainer:
             self.oracle = OracleSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, self.device)
 
     def train(self) -> TrainSummary:
-        """Run (or resume) training until the step count, the time budget or a plateau."""
+        """Run (or resume) training until the step count, the time budget or a plateau.
+
+        SIGTERM and Ctrl-C end it after the current step with a checkpoint of that step.
+
+        Raises:
+            TrainingStopped: a stop was asked for (the checkpoint is saved; rerun to resume).
+        """
         resumed = self._resume()
         if not resumed:
             self.model.warm_start(self.preset.warm_steps, self.config.seed)
+        with stop_requests() as stop:
+            return self._train(stop)
+
+    def _train(self, stop: StopRequest) -> TrainSummary:
         start, start_step, rays = time.perf_counter(), self.summary.steps, 0
         base_elapsed = self.summary.elapsed_s
+        saved_at = start
         while self.summary.steps < self.total_steps:
             rays += self._step()
             self.summary.steps += 1
             self.summary.elapsed_s = base_elapsed + time.perf_counter() - start
             if self.on_step is not None:
                 self.on_step(self)
+            if stop.signal_number is not None:
+                self._checkpoint()
+                where = self.run_dir / "checkpoint.pt" if self.run_dir else "nowhere"
+                raise TrainingStopped(
+                    f"stopped at step {self.summary.steps} ({stop.signal_name}); checkpoint "
+                    f"saved in {where}: run the same seecap fit again to resume",
+                    stop.signal_number,
+                )
+            if time.perf_counter() - saved_at > CHECKPOINT_EVERY_S:
+                self._checkpoint()
+                saved_at = time.perf_counter()
             if self._budget_left() <= 0:
                 self.summary.stopped = "budget"
                 break

@@ -92,3 +92,21 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
             )
         )
     assert (seen["config"].threshold, seen["config"].seed) == (0.25, 7)
+
+
+def test_a_stopped_fit_exits_143_with_one_line(monkeypatch, tmp_path, capsys):
+    import davis_io.prepare
+    import seenerf.train
+    import seenerf.train.fit
+    from davis_io.cli import main
+    from seenerf.errors import TrainingStopped
+
+    def stopped(*args, **kwargs):
+        raise TrainingStopped("stopped at step 7 (SIGTERM); checkpoint saved in x", 15)
+
+    monkeypatch.setattr(davis_io.prepare, "prepare_session", lambda session, b, log=print: 0.0)
+    monkeypatch.setattr(seenerf.train.fit, "session_bins", lambda session, config: 4)
+    monkeypatch.setattr(seenerf.train, "fit_session", stopped)
+    assert main(["fit", str(tmp_path), "--quiet"]) == 143
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["seecap: error: fit: stopped at step 7 (SIGTERM); checkpoint saved in x"]

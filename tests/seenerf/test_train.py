@@ -178,6 +178,32 @@ def test_a_plateau_stops_a_run_only_in_the_second_half_of_its_schedule(tiny_scen
     assert not trainer.plateaued()
 
 
+def test_sigterm_saves_the_step_it_was_at_and_the_fit_resumes_there(tiny_scene, tmp_path):
+    import os
+    import signal
+
+    from seenerf.errors import TrainingStopped
+    from seenerf.train.checkpoint import _read
+
+    def terminate_at_step_3(trainer):
+        if trainer.summary.steps == 3:
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    trainer = Trainer(
+        tiny_scene, _config(steps=50), tmp_path, lambda line: None, 0.0, terminate_at_step_3
+    )
+    with pytest.raises(
+        TrainingStopped, match="stopped at step 3 .SIGTERM.; checkpoint saved"
+    ) as stop:
+        trainer.train()
+    assert stop.value.exit_status == 128 + signal.SIGTERM  # 143, as if the signal had ended it
+    assert _read(tmp_path / "checkpoint.pt")["steps"] == 3
+    assert signal.getsignal(signal.SIGTERM) is not None  # the handler is given back
+    lines = []
+    resumed = Trainer(tiny_scene, _config(steps=5), tmp_path, lines.append)
+    assert resumed.train().steps == 5 and any("resuming at step 3" in line for line in lines)
+
+
 def test_progress_line_reports_losses_psnr_rate_and_eta(tiny_scene):
     lines = []
     trainer = Trainer(tiny_scene, _config(steps=4), log=lines.append)
