@@ -116,7 +116,8 @@ def test_align_poses_takes_its_rotation_from_the_orientations_not_the_centres():
     assert np.allclose(fit.rotation, known.rotation, atol=1e-9)  # orientations are exact
     assert fit.scale == pytest.approx(3.0, rel=1e-3)
     mapped = fit.apply_poses(estimated)
-    assert np.allclose(rotation_error_deg(mapped[:, :3, :3], true[:, :3, :3]), 0, atol=1e-6)
+    # arccos near 1 turns rounding of 1e-16 into about 1e-6 degrees: exact is below 1e-4.
+    assert np.allclose(rotation_error_deg(mapped[:, :3, :3], true[:, :3, :3]), 0, atol=1e-4)
     # A fit to the centres would have turned every camera by about the tilt.
     centres = umeyama(estimated[:, :3, 3], true[:, :3, 3])
     assert rotation_error_deg(centres.rotation, known.rotation) > 0.4

@@ -1,7 +1,7 @@
 """Blind benchmark: six sessions with randomly drawn sensors, each fitted from its recording.
 
     python tools/bench_blind.py [--out bench-out/blind] [--budget 600] [--sessions room-s10 ...]
-                                [--fresh]
+                                [--fresh] [--jobs 2] [--publish]
 
 For every session of :data:`benchlib.blind.BLIND_SESSIONS`: record it with a random sensor, fit
 ``full`` end to end (calibration and poses included) with the budget, then ``white-box`` (the
@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from benchlib.blind import (
@@ -43,21 +45,38 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--publish", action="store_true", help="copy the results into the repository's report"
     )
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="sessions run side by side, the cores shared out among them (each fit gets fewer "
+        "threads, so fewer steps in its budget: scores can only be lower than alone)",
+    )
     args = parser.parse_args(argv)
     chosen = [s for s in BLIND_SESSIONS if s.key in args.sessions]
-    rows, start = [], time.time()
-    for spec in chosen:
-        rows.append(run_blind_session(spec, args.out, args.budget, fresh=args.fresh))
-        document = {
-            "commit": source_commit(),
-            "command": exact_command(),
-            "machine": describe_machine().line(),
-            "budget_s": args.budget,
-            "wall_s": time.time() - start,
-            "rows": rows_to_json(rows),
-        }
-        (args.out / "blind.json").write_text(json.dumps(document, indent=1, default=str))
-        (args.out / "blind.md").write_text(blind_report(document) + "\n")
+    threads = max(1, (os.cpu_count() or 1) // args.jobs)
+    if args.jobs > 1:
+        os.environ["OMP_NUM_THREADS"] = str(threads)  # the children's torch threads
+    start, done = time.time(), {}
+
+    def run(spec):
+        return spec.key, run_blind_session(spec, args.out, args.budget, fresh=args.fresh)
+
+    with ThreadPoolExecutor(args.jobs) as pool:
+        for key, row in pool.map(run, chosen):
+            done[key] = row
+            document = {
+                "commit": source_commit(),
+                "command": exact_command(),
+                "machine": describe_machine().line(),
+                "budget_s": args.budget,
+                "jobs": args.jobs,
+                "threads_per_fit": threads,
+                "wall_s": time.time() - start,
+                "rows": rows_to_json([done[s.key] for s in chosen if s.key in done]),
+            }
+            (args.out / "blind.json").write_text(json.dumps(document, indent=1, default=str))
+            (args.out / "blind.md").write_text(blind_report(document) + "\n")
     print(blind_report(document))
     if args.publish:
         results = ROOT / RESULTS_FOLDER

@@ -14,6 +14,7 @@ from davis_io.session import (
     SensorCalibration,
     Session,
     default_calibration,
+    writer_lock,
 )
 
 __all__ = ["calibrate_session", "session_calibration"]
@@ -58,11 +59,13 @@ def calibrate_session(
     if not isinstance(session, Session):
         with Session.open(session) as opened:
             return calibrate_session(opened, force=force, progress=progress)
-    stored = session.calibration()
-    if stored is not None and not force:
-        return stored
-    calibration = calibrate_frames(_recording(session), progress=progress)
-    session.write_calibration(calibration)
+    with writer_lock(session.folder, "measuring the sensor"):
+        stored = session.calibration()
+        if stored is not None and not force:
+            return stored
+        session.require_writable()
+        calibration = calibrate_frames(_recording(session), progress=progress)
+        session.write_calibration(calibration)
     return calibration
 
 

@@ -17,7 +17,7 @@ from davis_io.poses.colmap import ColmapError, SparseModel
 from davis_io.poses.latent import calibrated_response, latent_images, sharpness
 from davis_io.poses.nerfstudio import latent_frame_name
 from davis_io.poses.recovery import reconstruct_with_recovery
-from davis_io.session import DEFAULT_BINS, Session, SessionPoses
+from davis_io.session import DEFAULT_BINS, Session, SessionPoses, writer_lock
 
 __all__ = [
     "PoseReport",
@@ -218,12 +218,17 @@ def estimate_poses(
                 progress=progress,
                 threshold=threshold,
             )
+    with writer_lock(session.folder, "estimating poses"):
+        return _estimate(session, b, _check_intrinsics(intrinsics), force, progress, threshold)
+
+
+def _estimate(session, b, intrinsics, force, progress, threshold) -> PoseReport:
     progress = progress or (lambda _stage, _done, _total: None)
-    intrinsics = _check_intrinsics(intrinsics)
     work_dir = session.folder / "colmap"
     report_path = work_dir / "report.json"
     if not force and session.poses(b) is not None and report_path.exists():
         return PoseReport.from_json(json.loads(report_path.read_text()))
+    session.require_writable()
     if session.frame_count < 2:
         raise ColmapError(
             f"{session.folder}: {session.frame_count} frame(s); poses need at least 2 frames "

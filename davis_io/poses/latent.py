@@ -21,6 +21,7 @@ from davis_io.types import ColorFilter, Frame
 __all__ = [
     "ResponseCurve",
     "calibrated_response",
+    "auto_white",
     "display_encoding",
     "latent_images",
     "normalised_image",
@@ -50,8 +51,10 @@ class ResponseCurve:
 
 
 _GAMMA = 2.2
+_MID_GREY = 0.18
+"""The blurry frame's median exposure shows as this fraction of white (a camera's auto exposure)."""
 _WHITE_PERCENTILE = 99.5
-"""The blurry frame's exposure at this percentile is white in its latent frames."""
+"""White is at most the blurry frame's exposure at this percentile."""
 
 
 def calibrated_response(calibration: SensorCalibration) -> ResponseCurve | None:
@@ -116,8 +119,18 @@ def latent_images(
     else:
         exposure = response.to_linear(blurry)
         linear = edi_latent_frames(exposure, counts, weights, threshold)
-        latent = display_encoding(linear, float(np.percentile(exposure, _WHITE_PERCENTILE)))
+        latent = display_encoding(linear, auto_white(exposure))
     return [_to_8bit(image, color_filter) for image in latent]
+
+
+def auto_white(exposure: np.ndarray) -> float:
+    """The exposure a display shows as white: the median at mid-grey, highlights let clip.
+
+    A scene lit from near dark to glare would otherwise be shown for its lamps, with the rest
+    near black; at most the bright percentile, so a frame without highlights is not clipped.
+    """
+    median, bright = np.percentile(exposure, [50.0, _WHITE_PERCENTILE])
+    return float(min(median / _MID_GREY, bright))
 
 
 def display_encoding(linear: np.ndarray, white: float) -> np.ndarray:

@@ -8,6 +8,7 @@ from davis_io.bins import subdivide, trapezoid_weights
 from davis_io.colorfilter import filter_weights
 from davis_io.session.calibration import SensorCalibration, default_calibration
 from davis_io.session.defaults import DEFAULT_BINS, DEFAULT_THRESHOLD
+from davis_io.session.lock import SessionBusy, writer_lock
 from davis_io.session.manifest import DropCounters, SessionManifest, read_manifest
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.store import Session
@@ -27,6 +28,7 @@ __all__ = [
     "SessionManifest",
     "SessionPoses",
     "SensorCalibration",
+    "SessionBusy",
     "Truth",
     "default_calibration",
     "filter_weights",
@@ -37,4 +39,5 @@ __all__ = [
     "seconds_argument",
     "subdivide",
     "trapezoid_weights",
+    "writer_lock",
 ]

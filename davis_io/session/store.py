@@ -27,6 +27,7 @@ from davis_io.session.layout import (
     read_events_between,
     write_bins_row,
 )
+from davis_io.session.lock import writer_lock
 from davis_io.session.manifest import SessionManifest, read_manifest
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.truth import TRUTH_DIR, Truth, load_truth
@@ -334,7 +335,7 @@ class Session(Closing):
     def _compute_bins(self, b: int) -> None:
         """Bin every frame's exposure for ``b`` from the stored events and save the result."""
         table = self.frames_table()
-        with self._writable() as h5:
+        with writer_lock(self.folder, f"adding bins for b={b}"), self._writable() as h5:
             if bins_path(b) in h5:
                 del h5[bins_path(b)]
             group = create_bins_group(h5, b=b, width=self.width, height=self.height)
@@ -347,13 +348,22 @@ class Session(Closing):
                 )
                 write_bins_row(group, exposure)
 
-    def _writable(self) -> _WritableSession:
-        """Reopen the HDF5 file for writing for the duration of a ``with`` block."""
+    def require_writable(self) -> None:
+        """Refuse, before any work, to add to a recording that was not closed cleanly.
+
+        Raises:
+            SessionError: the session needs repair first (the message gives the command).
+        """
         if self.needs_repair:
             raise SessionError(
                 f"{self.folder}: the recording was not closed cleanly; run "
-                f"`seecap inspect {self.folder} --repair` before adding bins or poses"
+                f"`seecap inspect {self.folder} --repair` before adding bins, a calibration or "
+                "poses"
             )
+
+    def _writable(self) -> _WritableSession:
+        """Reopen the HDF5 file for writing for the duration of a ``with`` block."""
+        self.require_writable()
         return _WritableSession(self)
 
 

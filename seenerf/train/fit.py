@@ -10,7 +10,8 @@ from pathlib import Path
 
 import torch
 
-from davis_io.session import DEFAULT_BINS, Session
+from davis_io.session import DEFAULT_BINS, Session, writer_lock
+from davis_io.session.lock import LOCK_NAME
 from seenerf.data.arrays import TrainingData
 from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
@@ -117,9 +118,16 @@ def fit_data(
 
     Every line logged also goes to ``run_dir/log.txt``.
     """
-    if fresh and run_dir.exists():
-        shutil.rmtree(run_dir)
-    run_dir.mkdir(parents=True, exist_ok=True)
+    with writer_lock(run_dir, f"fitting {run_dir.name}"):
+        return _fit(data, config, run_dir, fresh, log, spent_s, on_step)
+
+
+def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
+    for child in run_dir.iterdir() if fresh else ():
+        if child.is_dir():
+            shutil.rmtree(child)
+        elif child.name != LOCK_NAME:
+            child.unlink()
     log = _logged_to(run_dir / "log.txt", log)
     trainer = Trainer(data, config, run_dir, log, spent_s, on_step)
     threads = torch.get_num_threads() if trainer.device == "cpu" else 0

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from davis_io.errors import UsageError
-from davis_io.poses.latent import ResponseCurve, latent_images, sharpness
+from davis_io.poses.latent import ResponseCurve, auto_white, latent_images, sharpness
 from davis_io.types import ColorFilter, Frame
 
 
@@ -41,8 +41,8 @@ def test_response_curve_runs_the_edi_on_linear_values():
     assert curve.to_linear(np.array([0.5]))[0] == pytest.approx(1.0, abs=1e-3)
     # Blurry values 0.5 and 1 -> linear 1 and 4; the first pixel's one bin doubles it:
     # L_0 = 1 / 1.5, L_1 = 4/3 (linear). White is the blurry exposures' 99.5th percentile,
-    # 1 + 0.995 * 3 = 3.985, and the display gamma 2.2 gives (2/3 / 3.985) ** (1/2.2) = 0.444
-    # and (4/3 / 3.985) ** (1/2.2) = 0.608: 113 and 155 in 8 bits, whatever the curve.
+    # 1 + 0.995 * 3 = 3.985 (below median / 0.18 = 13.9), and the display gamma 2.2 gives
+    # (2/3 / 3.985) ** (1/2.2) = 0.444 and (4/3 / 3.985) ** (1/2.2) = 0.608: 113 and 155 in 8 bits, whatever the curve.
     image = np.array([[0.5, 1.0]]) * 255
     counts = np.array([[[np.log(2) / 0.3, 0.0]]])
     first, last = latent_images(
@@ -55,6 +55,16 @@ def test_response_curve_runs_the_edi_on_linear_values():
     )
     assert abs(int(first[0, 0]) - 113) <= 1 and abs(int(last[0, 0]) - 155) <= 1
     assert int(first[0, 1]) == int(last[0, 1]) == 255  # no events: the brightest stays white
+
+
+def test_a_few_glaring_pixels_do_not_darken_the_rest():
+    # 990 pixels at 0.1 and 10 lamps at 100: white would be 100 by the 99.5th percentile,
+    # showing the room at (0.001) ** (1/2.2) = 4 % grey; the median at mid-grey puts white at
+    # 0.1 / 0.18 = 0.556 and the room at 0.18 ** (1/2.2) = 46 %.
+    exposure = np.concatenate([np.full(990, 0.1), np.full(10, 100.0)])
+    assert auto_white(exposure) == pytest.approx(0.1 / 0.18)
+    # Without highlights the bright percentile bounds it: nothing clips that need not.
+    assert auto_white(np.linspace(1.0, 2.0, 1001)) == pytest.approx(1.995)
 
 
 def test_sharpness_prefers_the_sharp_image():

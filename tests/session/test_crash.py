@@ -69,6 +69,18 @@ def test_killed_recording_opens_and_repairs(tmp_path):
     assert "nothing to repair" in text and "interrupted" in text
 
 
+def test_an_unrepaired_session_is_refused_before_any_work(tmp_path, capsys):
+    from davis_io.cli import main
+
+    folder = tmp_path / "s"
+    record_then_signal(folder, 5, signal.SIGKILL)
+    for verb in ("calibrate", "poses"):
+        assert main([verb, str(folder)]) == 1
+        err = capsys.readouterr().err
+        assert f"seecap inspect {folder} --repair" in err and "Traceback" not in err
+    assert not (folder / "colmap").exists()  # nothing was started
+
+
 def test_ctrl_c_closes_the_session_interrupted(tmp_path):
     folder = tmp_path / "s"
     reported, code = record_then_signal(folder, 5, signal.SIGINT)

@@ -1,0 +1,42 @@
+"""One writer per session: a second gets one line naming the first; a dead one's lock is free."""
+
+import subprocess
+import sys
+import time
+
+import pytest
+
+from davis_io.session import SessionBusy, writer_lock
+from davis_io.session.lock import LOCK_NAME
+
+HOLD = (
+    "import sys, time\n"
+    "from davis_io.session import writer_lock\n"
+    "with writer_lock(sys.argv[1], 'estimating poses'):\n"
+    "    print('held', flush=True)\n"
+    "    time.sleep(60)\n"
+)
+
+
+def test_a_second_writer_is_refused_by_name_until_the_first_dies(tmp_path):
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLD, str(tmp_path)], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(SessionBusy) as busy:
+            with writer_lock(tmp_path, "fitting"):
+                pass
+        message = str(busy.value)
+        assert f"process {holder.pid} (estimating poses, since" in message
+        assert "wait for it to finish or stop it" in message
+    finally:
+        holder.kill()  # SIGKILL: no clean-up, the lock file stays behind
+        holder.wait(timeout=30)
+    assert (tmp_path / LOCK_NAME).exists()
+    with writer_lock(tmp_path, "fitting"):  # the kernel dropped the dead holder's lock
+        with writer_lock(tmp_path, "adding bins"):  # the same process may nest
+            pass
+    started = time.time()
+    with writer_lock(tmp_path, "fitting"):
+        assert time.time() - started < 5
