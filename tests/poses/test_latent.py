@@ -42,7 +42,8 @@ def test_response_curve_runs_the_edi_on_linear_values():
     # Blurry values 0.5 and 1 -> linear 1 and 4; the first pixel's one bin doubles it:
     # L_0 = 1 / 1.5, L_1 = 4/3 (linear). White is the blurry exposures' 99.5th percentile,
     # 1 + 0.995 * 3 = 3.985 (below median / 0.18 = 13.9), and the display gamma 2.2 gives
-    # (2/3 / 3.985) ** (1/2.2) = 0.444 and (4/3 / 3.985) ** (1/2.2) = 0.608: 113 and 155 in 8 bits, whatever the curve.
+    # (2/3 / 3.985) ** (1/2.2) = 0.444 and (4/3 / 3.985) ** (1/2.2) = 0.608: 113 and 155 in
+    # 8 bits, whatever the curve.
     image = np.array([[0.5, 1.0]]) * 255
     counts = np.array([[[np.log(2) / 0.3, 0.0]]])
     first, last = latent_images(
