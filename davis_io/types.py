@@ -157,7 +157,9 @@ class Packet:
     Events, IMU samples and triggers are structured arrays (possibly empty); frames are complete
     frames in order of exposure start. ``dropped_events`` counts events known lost before this
     packet (device FIFO overflow, host queue overflow, dropped transfers) so consumers can flag
-    affected frames; ``notes`` carries human-readable warnings (truncation, skipped data).
+    affected frames; ``notes`` carries human-readable warnings (truncation, skipped data);
+    ``truncated_at`` is the byte offset at which a recording file ends inside a record: its
+    source has nothing more, and what the file held after that offset is lost.
     """
 
     events: np.ndarray = field(default_factory=empty_events)
@@ -166,6 +168,7 @@ class Packet:
     triggers: np.ndarray = field(default_factory=empty_triggers)
     dropped_events: int = 0
     notes: list[str] = field(default_factory=list)
+    truncated_at: int | None = None
 
     @property
     def is_empty(self) -> bool:

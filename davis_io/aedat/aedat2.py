@@ -252,6 +252,7 @@ class Aedat2Reader(FileReader):
             complete = len(data) - len(data) % RECORD_DTYPE.itemsize
             packet = decoder.decode(np.frombuffer(data, dtype=RECORD_DTYPE, count=complete // 8))
             if complete < len(data):
+                packet.truncated_at = offset + complete
                 packet.notes.append(
                     warn_note(
                         f"{self.path}: file truncated at byte offset {offset + complete}: "

@@ -77,12 +77,13 @@ class Aedat31Reader(FileReader):
             if len(header) < _PACKET_HEADER.size:
                 if header:
                     yield Packet(
+                        truncated_at=offset,
                         notes=[
                             warn_note(
                                 f"{self.path}: file truncated at byte offset {offset}: incomplete "
                                 f"header of packet {index}; later data is lost"
                             )
-                        ]
+                        ],
                     )
                 return
             fields = _check_header(header, offset, index, str(self.path))
@@ -111,6 +112,8 @@ class Aedat31Reader(FileReader):
                         f"{fields[0]} is not read (polarity, frame, IMU6, special are); skipped"
                     )
                 )
+            if notes:
+                packet.truncated_at = offset
             yield packet
             if notes:
                 return

@@ -81,28 +81,36 @@ class Aedat4Reader(FileReader):
         return min(e.timestamp_start for e in stamped), max(e.timestamp_end for e in stamped)
 
     def __iter__(self) -> Iterator[Packet]:
-        notes = list(self._header_notes)
+        notes, truncated = list(self._header_notes), False
         for item in self._walk():
             if isinstance(item, str):
                 notes.append(item)
+            elif isinstance(item, Packet):
+                truncated = True
+                yield _with_notes(item, notes)
             else:
                 yield _with_notes(self._decode(*item), notes)
-        if notes:
+        if self._cut_at is not None and not truncated:
+            yield Packet(notes=notes, truncated_at=self._cut_at)
+        elif notes:
             yield Packet(notes=notes)
 
-    def _walk(self) -> Iterator[tuple[int, int, int, memoryview] | str]:
-        """Read packets in file order: (index, offset, stream id, payload) or a note string.
+    def _walk(self) -> Iterator[tuple[int, int, int, memoryview] | str | Packet]:
+        """Read packets in file order: their payloads, notes, and where a truncated file stops.
 
-        Each payload is a view of a buffer that the next packet's payload overwrites. Packets
-        of unknown streams are skipped here, with one note per stream.
+        Yields ``(index, offset, stream id, payload)``, a note string, or the empty packet that
+        ends a truncated file (its ``truncated_at``). Each payload is a view of a buffer that
+        the next packet's payload overwrites. Packets of unknown streams are skipped here, with
+        one note per stream.
         """
         offset, index, skipped = self._data_start, 0, set()
         while offset < self._data_end:
             header = self._read_at(offset, _PACKET_HEADER.size)
             if len(header) < _PACKET_HEADER.size:
-                yield warn_note(
+                yield _cut(
+                    offset,
                     f"{self.path}: file truncated at byte offset {offset}: "
-                    "incomplete packet header; later data is lost"
+                    "incomplete packet header; later data is lost",
                 )
                 return
             stream_id, size = _PACKET_HEADER.unpack(header)
@@ -114,9 +122,10 @@ class Aedat4Reader(FileReader):
                 )
             payload = self._read_payload(min(size, self._data_end - offset - _PACKET_HEADER.size))
             if len(payload) < size:
-                yield warn_note(
+                yield _cut(
+                    offset,
                     f"{self.path}: file truncated at byte offset {offset}: packet {index} needs "
-                    f"{size} bytes, {len(payload)} remain; later data is lost"
+                    f"{size} bytes, {len(payload)} remain; later data is lost",
                 )
                 return
             type_id = self._type_of(stream_id)
@@ -187,10 +196,11 @@ class Aedat4Reader(FileReader):
         self.compression = header.compression
         self._decompress = packet_decompressor(self.compression, self._native_lz4)
         self._data_start = len(MAGIC) + 4 + length
-        self._data_end, self._header_notes = file_size, []
+        self._data_end, self._header_notes, self._cut_at = file_size, [], None
         self.data_table: list[DataTableEntry] | None = None
         position = header.data_table_position
         if position > file_size:
+            self._cut_at = file_size
             self._header_notes.append(
                 warn_note(
                     f"{path}: data table position {position} lies beyond the end of the file "
@@ -283,6 +293,11 @@ def _frame_packet(stream: StreamDescription, buf: bytes) -> Packet:
     depth = stream.info.get(FRAME_BIT_DEPTH_KEY, "16")
     bit_depth = int(depth) if depth.isdigit() and 1 <= int(depth) <= 16 else 16
     return Packet(frames=[decode_frame(buf, bit_depth)])
+
+
+def _cut(offset: int, message: str) -> Packet:
+    """The packet that ends a truncated file: no records, the note, where the data stops."""
+    return Packet(notes=[warn_note(message)], truncated_at=offset)
 
 
 def _with_notes(packet: Packet, notes: list[str]) -> Packet:

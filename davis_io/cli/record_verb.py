@@ -13,7 +13,6 @@ from davis_io.session.units import parse_duration_us
 __all__ = ["HELP", "add_arguments", "run"]
 
 HELP = "record APS frames and DVS events in sync into a session folder"
-EXIT_INTERRUPTED = 130
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -90,7 +89,12 @@ def run(args: argparse.Namespace) -> int:
     if printer.live:
         print(file=sys.stderr)  # end the status line
     print(_summary(result))
-    return 0 if result.status == "complete" else EXIT_INTERRUPTED
+    if result.stop_signal:
+        return 128 + result.stop_signal
+    if result.status != "complete":
+        print(f"seecap: warning: record: {result.manifest.stop_reason}", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _duration(text: str | None, what: str) -> int | None:

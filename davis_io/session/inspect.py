@@ -31,6 +31,7 @@ __all__ = [
     "session_report",
 ]
 
+_NOTES_SHOWN = 5
 _REPAIRED_REASON = "the recording never closed (killed, crashed or unplugged); repaired"
 
 
@@ -59,15 +60,26 @@ def session_report(path: Path | str, *, frames: bool, repair: bool, as_json: boo
     """Summary of a session (after repairing it when ``repair``), with a frame table if asked."""
     lines = [repair_session(path).describe()] if repair else []
     with Session.open(path) as session:
+        session.check_coordinates()
         summary = _summary(session)
         table = _frame_rows(session) if frames else None
     if as_json:
         document = {"session": summary, **({"frames": table} if table is not None else {})}
         return "\n".join([*lines, json.dumps(document, indent=2)])
-    lines.extend(f"{key:28s} {value}" for key, value in summary.items())
+    for key, value in summary.items():
+        if key == "source_notes":
+            lines.extend(f"{'source note':28s} {note}" for note in _shown_notes(value))
+        else:
+            lines.append(f"{key:28s} {value}")
     if table is not None:
         lines.append(_format_table(table))
     return "\n".join(lines)
+
+
+def _shown_notes(notes: list[str]) -> list[str]:
+    """The first notes, and how many more ``--json`` lists."""
+    more = len(notes) - _NOTES_SHOWN
+    return notes[:_NOTES_SHOWN] + ([f"... and {more} more (--json lists them)"] if more > 0 else [])
 
 
 def _summary(session: Session) -> dict:
@@ -75,13 +87,14 @@ def _summary(session: Session) -> dict:
     manifest = session.manifest
     table = session.frames_table()
     counts = session.window_event_counts()
-    return {
+    return {  # how the recording ended first: a truncated or interrupted one says so at once
+        "status": manifest.status + (f" ({manifest.stop_reason})" if manifest.stop_reason else ""),
+        "needs_repair": session.needs_repair,
+        "source_notes": manifest.source_notes,
         "folder": str(session.folder),
         "camera": f"{manifest.camera} serial {manifest.serial or '?'}",
         "resolution": f"{manifest.width}x{manifest.height} ({manifest.color_filter})",
         "source": manifest.source,
-        "status": manifest.status + (f" ({manifest.stop_reason})" if manifest.stop_reason else ""),
-        "needs_repair": session.needs_repair,
         "started_utc": manifest.start_time_utc,
         "stopped_utc": manifest.stop_time_utc,
         "frames": session.frame_count,

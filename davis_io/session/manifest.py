@@ -78,6 +78,8 @@ class SessionManifest:
         stop_time_utc: ISO 8601 UTC wall-clock time it stopped ("" while recording).
         status: ``"recording"``, ``"complete"`` or ``"interrupted"``.
         stop_reason: why an interrupted recording stopped ("" when complete).
+        source_notes: what the source reported skipping or losing (a truncated file, unread
+            streams, dropped frames), in its own words with byte offsets.
         frame_count: frames stored.
         event_count: events stored.
         drops: loss counters.
@@ -101,6 +103,7 @@ class SessionManifest:
     stop_time_utc: str = ""
     status: str = STATUS_RECORDING
     stop_reason: str = ""
+    source_notes: list[str] = field(default_factory=list)
     frame_count: int = 0
     event_count: int = 0
     drops: DropCounters = field(default_factory=DropCounters)
@@ -155,14 +158,73 @@ class SessionManifest:
                 f"{where}: session format version {version!r}, this seecap reads version "
                 f"{FORMAT_VERSION}: use the seecap version that wrote it"
             )
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - known)
+        missing = sorted(f for f in _REQUIRED if f not in values)
+        if unknown or missing:
+            raise SessionError(
+                f"{where}: "
+                + "; ".join(
+                    [f"unknown field {name!r}" for name in unknown]
+                    + [f"missing field {name!r}" for name in missing]
+                )
+            )
+        _check_types(values, _FIELD_TYPES, where)
+        drops = values.get("drops", {})
+        if not isinstance(drops, dict):
+            raise SessionError(f"{where}: field 'drops' must be an object, not {drops!r}")
+        _check_types(drops, dict.fromkeys(drops, (int,)), f"{where}: drops")
         try:
-            values["drops"] = DropCounters(**values.get("drops", {}))
-            manifest = cls(**values)
+            values["drops"] = DropCounters(**drops)
         except TypeError as error:
-            raise SessionError(f"{where}: unexpected or missing field ({error})") from error
+            raise SessionError(f"{where}: drops: unexpected field ({error})") from error
+        manifest = cls(**values)
         if manifest.status not in _STATUSES:
             raise SessionError(f"{where}: status {manifest.status!r} is not one of {_STATUSES}")
+        for name in ("width", "height", "b"):
+            if getattr(manifest, name) < 1:
+                raise SessionError(f"{where}: field {name!r} must be >= 1, not {values[name]}")
         return manifest
+
+
+_REQUIRED = ("camera", "serial", "width", "height", "color_filter", "source", "b")
+_INT, _STR, _OPTIONAL_INT = (int,), (str,), (int, type(None))
+_FIELD_TYPES: dict[str, tuple[type, ...]] = {
+    **dict.fromkeys(("width", "height", "b", "frame_count", "event_count"), _INT),
+    **dict.fromkeys(("format_version",), _INT),
+    **dict.fromkeys(
+        ("firmware_version", "logic_version", "exposure_requested_us", "exposure_measured_us"),
+        _OPTIONAL_INT,
+    ),
+    **dict.fromkeys(
+        (
+            "camera",
+            "serial",
+            "color_filter",
+            "source",
+            "start_time_utc",
+            "stop_time_utc",
+            "status",
+            "stop_reason",
+            "tool_version",
+        ),
+        _STR,
+    ),
+    "device_config": (dict,),
+    "source_notes": (list,),
+}
+"""The JSON types each field may hold (``drops`` is checked on its own)."""
+
+
+def _check_types(values: dict, types: dict[str, tuple[type, ...]], where: str) -> None:
+    """Raise on the first field whose JSON value is not of its type (a bool is not a number)."""
+    for name, allowed in types.items():
+        if name not in values:
+            continue
+        value = values[name]
+        if isinstance(value, bool) or not isinstance(value, allowed):
+            wanted = " or ".join("null" if t is type(None) else t.__name__ for t in allowed)
+            raise SessionError(f"{where}: field {name!r} must be {wanted}, not {value!r}")
 
 
 def _json_text(value) -> object:
@@ -187,6 +249,11 @@ def read_manifest(session_dir: Path) -> SessionManifest:
         raise SessionError(
             f"{path} not found: {session_dir} is not a session folder (record one with "
             "`seecap record`)"
+        ) from error
+    except UnicodeDecodeError as error:
+        raise SessionError(
+            f"{path}: byte offset {error.start} is not UTF-8 text ({error.reason}); the file is "
+            "damaged: restore it from a copy, or rewrite that field by hand"
         ) from error
     return SessionManifest.from_json(text, where=str(path))
 

@@ -21,8 +21,16 @@ from davis_io.session.sync import ClosedWindow, ExposureSync
 from davis_io.session.writer import SessionWriter
 from davis_io.types import Packet, PacketSource, empty_events
 
-__all__ = ["END_OF_STREAM", "Outcome", "Progress", "read_source", "write_packets"]
+__all__ = [
+    "END_OF_STREAM",
+    "MAX_SOURCE_NOTES",
+    "Outcome",
+    "Progress",
+    "read_source",
+    "write_packets",
+]
 
+MAX_SOURCE_NOTES = 100
 END_OF_STREAM = object()
 """Queue item the reader puts last."""
 _PUT_RETRY_S = 0.1
@@ -45,6 +53,10 @@ class Progress:
     drops: DropCounters = field(default_factory=DropCounters)
     preview: tuple | None = None
     """(frame image, bit depth, net event counts) of the newest frame."""
+    source_notes: list[str] = field(default_factory=list)
+    """What the source said it skipped or lost (the first :data:`MAX_SOURCE_NOTES`)."""
+    truncated_at: int | None = None
+    """Byte offset at which the source's file ended inside a record (None: it did not)."""
 
     def take_warnings(self) -> list[str]:
         """Remove and return the warnings raised since the last call (thread-safe)."""
@@ -195,6 +207,7 @@ class _WriterState:
         if packet.dropped_events or queue_loss:
             self.sync.note_loss()
             self.progress.drops.source_events += packet.dropped_events
+        self._note_source(packet)
         self.sync.add_events(packet.events)  # checks the order before anything is stored
         for records in (packet.imu, packet.triggers):
             if len(records):
@@ -223,6 +236,12 @@ class _WriterState:
     def close(self) -> None:
         """Stop the binning thread (pending work is dropped)."""
         self.binner.shutdown(wait=True, cancel_futures=True)
+
+    def _note_source(self, packet: Packet) -> None:
+        progress = self.progress
+        progress.source_notes.extend(packet.notes[: MAX_SOURCE_NOTES - len(progress.source_notes)])
+        if packet.truncated_at is not None and progress.truncated_at is None:
+            progress.truncated_at = packet.truncated_at
 
     def _note_time(self, packet: Packet) -> None:
         self.progress.events = self.writer.events_received

@@ -53,6 +53,8 @@ class RecordingResult:
     folder: Path
     manifest: SessionManifest
     warnings: list[str] = field(default_factory=list)
+    stop_signal: int = 0
+    """The signal that stopped the recording (SIGINT, SIGTERM), 0 when none did."""
 
     @property
     def status(self) -> str:
@@ -127,15 +129,19 @@ def record(
         run = _Run(source, folder, manifest, queue_packets)
         if drop_when_full is None:
             drop_when_full = source.info.origin == "usb"
-        with _ctrl_c_stops(run):
+        with _signals_stop(run):
             run.start(drop_when_full=drop_when_full, frames=frames, duration_us=duration_us)
             run.supervise(status_callback, preview_path)
     return run.finish()
 
 
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_SIGNAL_NAMES = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM"}
+
+
 @contextmanager
-def _ctrl_c_stops(run: _Run):
-    """While the threads run, Ctrl-C (SIGINT) asks them to stop instead of raising.
+def _signals_stop(run: _Run):
+    """While the threads run, Ctrl-C (SIGINT) and SIGTERM ask them to stop instead of raising.
 
     A KeyboardInterrupt can land between any two statements, also outside a ``try``; escaping
     while the writer thread still writes would close the HDF5 file under it. In the main thread
@@ -144,12 +150,16 @@ def _ctrl_c_stops(run: _Run):
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGINT, lambda _signum, _frame: run.interrupt())
+    previous = {
+        number: signal.signal(number, lambda signum, _frame: run.interrupt(signum))
+        for number in _STOP_SIGNALS
+    }
     try:
         yield
     finally:
-        # None: the handler was not installed from Python; Python's own takes its place.
-        signal.signal(signal.SIGINT, signal.default_int_handler if previous is None else previous)
+        for number, handler in previous.items():
+            # None: the handler was not installed from Python; the default takes its place.
+            signal.signal(number, signal.SIG_DFL if handler is None else handler)
 
 
 class _Run:
@@ -161,7 +171,7 @@ class _Run:
         self.stop = threading.Event()
         self.outcome = Outcome()
         self.progress = Progress()
-        self.interrupted = False
+        self.stop_signal = 0
         self.writer = SessionWriter(
             folder / H5_NAME, width=manifest.width, height=manifest.height, b=manifest.b
         )
@@ -219,9 +229,9 @@ class _Run:
                 self.stop.set()
         reader.join(timeout=_READER_JOIN_S)
 
-    def interrupt(self) -> None:
-        """Ctrl-C: stop both threads; the session is kept and marked interrupted."""
-        self.interrupted = True
+    def interrupt(self, signal_number: int) -> None:
+        """Ctrl-C or SIGTERM: stop both threads; the session is kept and marked interrupted."""
+        self.stop_signal = signal_number
         self.stop.set()
 
     def _report(self, callback, started: float, last: tuple[float, int]) -> tuple[float, int]:
@@ -262,13 +272,16 @@ class _Run:
         manifest.drops = self.progress.drops
         manifest.exposure_measured_us = self.progress.exposure_measured_us
         manifest.stop_time_utc = datetime.now(UTC).isoformat(timespec="seconds")
+        manifest.source_notes = list(self.progress.source_notes)
         message = self._error_message(storage_error)
-        clean = not message and not self.interrupted
-        clean = clean and (outcome.source_exhausted or outcome.limit_reached)
+        reason = message or self._stop_reason()
+        clean = not reason and (outcome.source_exhausted or outcome.limit_reached)
         manifest.status = STATUS_COMPLETE if clean else STATUS_INTERRUPTED
-        manifest.stop_reason = message or ("interrupted (Ctrl-C)" if not clean else "")
+        manifest.stop_reason = reason or ("" if clean else "the source stopped early")
         self.warnings_seen.extend(self.progress.take_warnings())
-        result = RecordingResult(self.folder, manifest, list(self.warnings_seen))
+        result = RecordingResult(
+            self.folder, manifest, list(self.warnings_seen), stop_signal=self.stop_signal
+        )
         try:
             write_manifest(self.folder, manifest)
         except OSError as error:
@@ -276,6 +289,19 @@ class _Run:
         if message:
             raise RecordingError(message, result)
         return result
+
+    def _stop_reason(self) -> str:
+        """Why a recording that did not fail is incomplete ("" when it is not)."""
+        if self.stop_signal:
+            return f"interrupted ({_SIGNAL_NAMES.get(self.stop_signal, self.stop_signal)})"
+        if self.progress.truncated_at is not None:
+            latest = self.progress.latest_t_us
+            kept = "no event before it" if latest is None else f"the events up to t={latest} µs"
+            return (
+                f"the source file is truncated at byte offset {self.progress.truncated_at}: "
+                f"what followed is lost; kept {self.writer.frames_written} frames and {kept}"
+            )
+        return ""
 
     def _error_message(self, storage_error: OSError | None) -> str:
         """One sentence on what stopped the recording ("" when nothing failed)."""

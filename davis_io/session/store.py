@@ -28,7 +28,12 @@ from davis_io.session.layout import (
     write_bins_row,
 )
 from davis_io.session.lock import writer_lock
-from davis_io.session.manifest import SessionManifest, read_manifest
+from davis_io.session.manifest import (
+    MANIFEST_NAME,
+    STATUS_COMPLETE,
+    SessionManifest,
+    read_manifest,
+)
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.truth import TRUTH_DIR, Truth, load_truth
 from davis_io.types import (
@@ -76,10 +81,17 @@ class Session(Closing):
         if not h5_path.exists():
             raise SessionError(f"{h5_path} not found: the session holds no recorded data")
         try:
-            return cls(folder, manifest, h5py.File(h5_path, "r"), needs_repair=False)
+            session = cls(folder, manifest, h5py.File(h5_path, "r"), needs_repair=False)
         except OSError as error:
             if "already open for write" not in str(error):
                 raise SessionError(f"{h5_path}: HDF5 cannot read it ({error})") from error
+        else:
+            try:
+                session._check_structure()
+            except SessionError:
+                session.close()
+                raise
+            return session
         # A writer that never closed the file: read it as a single-writer/multi-reader reader.
         try:
             return cls(folder, manifest, h5py.File(h5_path, "r", swmr=True), needs_repair=True)
@@ -95,6 +107,47 @@ class Session(Closing):
     def close(self) -> None:
         """Close the HDF5 file."""
         self._h5.close()
+
+    def _check_structure(self) -> None:
+        """Refuse a closed ``session.h5`` that lacks a dataset or disagrees with its manifest.
+
+        Raises:
+            SessionError: the first thing wrong, by dataset path or manifest field.
+        """
+        damaged = "the file was changed or damaged after recording; restore it from a copy"
+        for group, names in (("events", EVENT_FIELDS), ("frames", _FRAME_FIELDS)):
+            for name in names:
+                if name == "image" and self.manifest.frame_count == 0:
+                    continue  # created with the first frame
+                if f"{group}/{name}" not in self._h5:
+                    raise SessionError(f"{self.h5_path}: /{group}/{name} is missing: {damaged}")
+        if self.manifest.status != STATUS_COMPLETE:
+            return  # an interrupted recording's counts are what its repair found
+        for what, stored, stated in (
+            ("frame_count", self.frame_count, self.manifest.frame_count),
+            ("event_count", self.event_count, self.manifest.event_count),
+        ):
+            if stored != stated:
+                raise SessionError(
+                    f"{self.h5_path}: holds {stored} but {MANIFEST_NAME} field {what!r} says "
+                    f"{stated}: {damaged}"
+                )
+
+    def check_coordinates(self, chunk: int = 1 << 22) -> None:
+        """Read every event and refuse one outside the sensor (a damaged file).
+
+        Raises:
+            SessionError: names the first such event by index, time and coordinates.
+        """
+        events = self._h5["events"]
+        for first in range(0, self.event_count, chunk):
+            stop = min(first + chunk, self.event_count)
+            outside = (events["x"][first:stop] >= self.width) | (
+                events["y"][first:stop] >= self.height
+            )
+            if outside.any():
+                at = first + int(np.argmax(outside))
+                self._inside_sensor(self.events_by_index(at, at + 1), at)
 
     @property
     def h5_path(self) -> Path:
@@ -173,7 +226,22 @@ class Session(Closing):
         """Events with ``t0_us <= t <= t1_us`` (both ends included), as ``EVENT_DTYPE``."""
         if self.event_count == 0:
             return empty_events()
-        return read_events_between(self._h5["events"], self.event_count, t0_us, t1_us)
+        events = read_events_between(self._h5["events"], self.event_count, t0_us, t1_us)
+        return self._inside_sensor(events)
+
+    def _inside_sensor(self, events: np.ndarray, first_index: int | None = None) -> np.ndarray:
+        """``events``, or a SessionError naming the first one outside the sensor."""
+        outside = (events["x"] >= self.width) | (events["y"] >= self.height)
+        if len(events) and outside.any():
+            at = int(np.argmax(outside))
+            event = events[at]
+            where = "" if first_index is None else f"event {first_index + at}, "
+            raise SessionError(
+                f"{self.h5_path}: {where}t={int(event['t'])} µs lies at x={int(event['x'])}, "
+                f"y={int(event['y'])}, outside the {self.width}x{self.height} sensor: the file "
+                "is damaged; restore it from a copy"
+            )
+        return events
 
     def events_by_index(self, first: int, stop: int) -> np.ndarray:
         """Stored events ``first`` (included) to ``stop`` (excluded), in time order."""

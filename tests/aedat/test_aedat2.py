@@ -5,6 +5,7 @@ import pytest
 
 from davis_io.aedat import Aedat2Reader, open_recording
 from davis_io.aedat.aedat2 import RECORD_DTYPE, Aedat2Decoder
+from davis_io.aedat.report import RecordingWarning
 from davis_io.errors import FormatError
 
 HEADER = (
@@ -97,6 +98,14 @@ def test_dvs_and_external_input_with_y_flip(tmp_path):
     assert packet.events.tolist() == [(10, 0, 0, 1), (11, 345, 259, -1), (12, 100, 200, 1)]
     # rising edge 1, falling edge 2, pulse 3 (TriggerKind values)
     assert packet.triggers.tolist() == [(20, 1), (21, 2), (22, 3)]
+
+
+def test_a_cut_record_ends_the_stream_and_says_where(tmp_path):
+    # Six 8-byte records and 5 bytes of a seventh: the six are read, the cut is at 48.
+    with pytest.warns(RecordingWarning, match=f"byte offset {len(HEADER) + 48}"):
+        _, (packet,) = _read(tmp_path, DVS_AND_EXTERNAL + b"\x40\xd5\x98\x00\x00")
+    assert len(packet.events) == 3 and len(packet.triggers) == 3
+    assert packet.truncated_at == len(HEADER) + 48
 
 
 def test_imu_sample_uses_jaer_default_scale(tmp_path):

@@ -124,3 +124,5 @@ def test_truncated_packet_keeps_its_complete_events(tmp_path):
             packets = list(reader)
     assert packets[1].events.tolist() == [(2147484648, 345, 259, 1)]
     assert "truncated" in packets[1].notes[0]
+    assert packets[0].truncated_at is None
+    assert packets[1].truncated_at == len(HEADER) + len(SPECIAL)

@@ -93,7 +93,9 @@ def test_truncated_file_returns_complete_packets_and_warns(tmp_path, aestream_ae
     assert any("data table position" in m for m in messages)
     assert len(packets) == 11  # packets 0..9 and a last, empty packet carrying the note
     assert packets[-1].is_empty and f"byte offset {packet_offset}" in packets[-1].notes[-1]
+    assert packets[-1].truncated_at == packet_offset
     assert not any(p.is_empty for p in packets[:-1])
+    assert all(p.truncated_at is None for p in packets[:-1])
 
 
 @pytest.mark.parametrize("compression", [Compression.LZ4, Compression.ZSTD])

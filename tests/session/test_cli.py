@@ -1,6 +1,7 @@
 """The record, bins, export verbs and the session inspection, through ``seecap``'s entry point."""
 
 import json
+import signal
 
 import h5py
 import numpy as np
@@ -11,6 +12,7 @@ from davis_io.errors import DeviceError
 from davis_io.session import Session
 from davis_io.session.inspect import repair_session, session_report
 from davis_io.session.manifest import read_manifest, write_manifest
+from davis_io.session.recorder import RecordingResult
 
 dv = pytest.importorskip("dv_processing")
 
@@ -67,6 +69,18 @@ def test_no_camera_explains_what_to_do(tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "s").exists()
     code = main(["record", "--out", str(tmp_path / "s")])
     assert code == 2 and "needs --exposure" in capsys.readouterr().err  # a usage error
+
+
+@pytest.mark.parametrize(("stop_signal", "code"), [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
+def test_a_recording_stopped_by_a_signal_exits_128_plus_it(
+    replay_session, monkeypatch, capsys, stop_signal, code
+):
+    import davis_io.capture
+
+    folder, _ = replay_session
+    result = RecordingResult(folder, read_manifest(folder), stop_signal=stop_signal)
+    monkeypatch.setattr(davis_io.capture, "record_capture", lambda *a, **k: result)
+    assert main(["record", "--emulate", "room", "--out", str(folder)]) == code
 
 
 def test_frames_and_duration_exclude_each_other(tmp_path):

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from davis_io.session import Session
 from davis_io.session.inspect import repair_session, session_report
@@ -81,14 +82,17 @@ def test_an_unrepaired_session_is_refused_before_any_work(tmp_path, capsys):
     assert not (folder / "colmap").exists()  # nothing was started
 
 
-def test_ctrl_c_closes_the_session_interrupted(tmp_path):
+@pytest.mark.parametrize(
+    ("signal_number", "reason"), [(signal.SIGINT, "Ctrl-C"), (signal.SIGTERM, "SIGTERM")]
+)
+def test_ctrl_c_and_sigterm_close_the_session_interrupted(tmp_path, signal_number, reason):
     folder = tmp_path / "s"
-    reported, code = record_then_signal(folder, 5, signal.SIGINT)
-    assert code == 0  # record() returned normally after Ctrl-C
+    reported, code = record_then_signal(folder, 5, signal_number)
+    assert code == 0  # record() returned normally after the signal
     with Session.open(folder) as session:
         assert not session.needs_repair
         assert session.manifest.status == "interrupted"
-        assert session.manifest.stop_reason == "interrupted (Ctrl-C)"
+        assert session.manifest.stop_reason == f"interrupted ({reason})"
         assert session.frame_count >= reported >= 5
         assert session.manifest.frame_count == session.frame_count
 
