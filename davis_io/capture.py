@@ -15,7 +15,7 @@ from pathlib import Path
 from davis_io.chips import DEFAULT_FRAME_GAP_US
 from davis_io.errors import DeviceError, UsageError
 from davis_io.session.recorder import RecordingResult, record
-from davis_io.types import PacketSource
+from davis_io.types import ColorFilter, PacketSource
 
 __all__ = [
     "NO_CAMERA_ADVICE",
@@ -50,6 +50,8 @@ class CaptureRequest:
         emulate: built-in scene to film with the emulator instead of a camera.
         sensor: the emulator's sensor, ``default`` or ``random`` (drawn from ``seed``).
         seed: the emulator's seed (shake, pixel mismatch, noise and a random sensor).
+        color_filter: the replayed sensor's colour filter, for a file that does not state it
+            (None: the file's).
     """
 
     exposure_us: int | None = None
@@ -60,6 +62,7 @@ class CaptureRequest:
     emulate: str | None = None
     sensor: str = "default"
     seed: int = 0
+    color_filter: ColorFilter | None = None
 
     @property
     def kind(self) -> str:
@@ -86,8 +89,9 @@ class CaptureRequest:
 
 def _open_replay(request: CaptureRequest) -> PacketSource:
     from davis_io.aedat import open_recording
+    from davis_io.aedat.colour_frames import RawMosaicFrames
 
-    return open_recording(request.replay)
+    return RawMosaicFrames(open_recording(request.replay), request.color_filter)
 
 
 def _open_emulator(request: CaptureRequest) -> PacketSource:

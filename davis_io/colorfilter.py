@@ -14,14 +14,33 @@ from davis_io.errors import UsageError
 from davis_io.types import ColorFilter
 
 __all__ = [
+    "BAYER_PATTERNS",
+    "DEVICE_COLOR_FILTERS",
     "LUMINANCE_WEIGHTS",
     "bayer_to_rgb_code",
     "filter_channels",
     "filter_weights",
+    "mosaic_of",
 ]
 
 LUMINANCE_WEIGHTS = np.array([0.2126, 0.7152, 0.0722], np.float32)
 """Rec. 709 weights of linear R, G, B seen by a monochrome pixel."""
+
+DEVICE_COLOR_FILTERS = (
+    ColorFilter.MONO,
+    ColorFilter.RGGB,
+    ColorFilter.GRBG,
+    ColorFilter.GBRG,
+    ColorFilter.BGGR,
+    ColorFilter.RGWB,
+    ColorFilter.GRBW,
+    ColorFilter.WBRG,
+    ColorFilter.BWGR,
+)
+"""The DAVIS APS ``COLOR_FILTER`` register value (libcaer's enum) -> our pattern.
+
+libcaer names its values by the tile read clockwise from the top-left pixel (``RGBG`` = 1 is
+R G / G B, our ``RGGB``); ours read it row by row."""
 
 _LETTER_WEIGHTS = {
     "R": np.array([1, 0, 0], np.float32),
@@ -64,6 +83,32 @@ _BAYER_TO_RGB = {
 OpenCV's own short names count from the second row (its ``COLOR_BayerBG2RGB`` is our ``RGGB``);
 the four-letter aliases used here equal those codes and read like ours.
 """
+
+
+def mosaic_of(rgb: np.ndarray, color_filter: ColorFilter) -> np.ndarray:
+    """The raw mosaic behind a demosaiced ``(H, W, 3)`` RGB frame: each pixel's own channel.
+
+    Exact for demosaicing that keeps every site's own sample and interpolates only the other
+    two channels (bilinear, as OpenCV's ``COLOR_Bayer*2RGB`` and libcaer's), except on the
+    outermost ring of pixels, which OpenCV copies from the ring inside it.
+
+    Raises:
+        UsageError: ``color_filter`` is monochrome or has ``W`` sites (no one channel a pixel
+            sees), or ``rgb`` is not ``(H, W, 3+)``.
+    """
+    if rgb.ndim != 3 or rgb.shape[2] < 3:
+        raise UsageError(f"a demosaiced frame is (H, W, 3), not {rgb.shape}")
+    channels = filter_channels(color_filter, *rgb.shape[:2])
+    if channels is None or not color_filter.is_color:
+        raise UsageError(
+            f"colour frames cannot be mosaiced to {color_filter.value}: give a Bayer pattern "
+            f"({', '.join(c.value for c in BAYER_PATTERNS)})"
+        )
+    return np.take_along_axis(rgb, channels[..., None], axis=2)[..., 0]
+
+
+BAYER_PATTERNS = tuple(_BAYER_TO_RGB)
+"""The 2x2 Bayer patterns: one colour per pixel, demosaiced by OpenCV."""
 
 
 def bayer_to_rgb_code(color_filter: ColorFilter) -> int:

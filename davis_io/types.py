@@ -76,18 +76,14 @@ class ColorFilter(enum.Enum):
     """
 
     MONO = "mono"
-    RGBG = "RGBG"
-    GRGB = "GRGB"
-    GBGR = "GBGR"
-    BGRG = "BGRG"
     RGGB = "RGGB"
     GRBG = "GRBG"
     GBRG = "GBRG"
     BGGR = "BGGR"
-    RGBW = "RGBW"
-    GRWB = "GRWB"
-    WBGR = "WBGR"
-    BWRG = "BWRG"
+    RGWB = "RGWB"
+    GRBW = "GRBW"
+    WBRG = "WBRG"
+    BWGR = "BWGR"
 
     @property
     def is_color(self) -> bool:

@@ -225,7 +225,7 @@ class Aedat2Reader(FileReader):
             global_shutter,
             2 if model == "DAVIS240" else 1,
         )
-        color = ColorFilter.RGBG if "color" in chip_name.lower() else ColorFilter.MONO
+        color = ColorFilter.RGGB if "color" in chip_name.lower() else ColorFilter.MONO
         self.info = SourceInfo(
             camera=model,
             serial="",

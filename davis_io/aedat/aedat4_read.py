@@ -27,8 +27,9 @@ from davis_io.aedat.aedat4_streams import (
     decode_triggers,
 )
 from davis_io.aedat.report import FileReader, warn_note
+from davis_io.colorfilter import DEVICE_COLOR_FILTERS
 from davis_io.errors import FormatError
-from davis_io.types import Packet, SourceInfo
+from davis_io.types import ColorFilter, Packet, SourceInfo
 
 __all__ = ["Aedat4Reader", "clip_packet"]
 
@@ -245,9 +246,25 @@ class Aedat4Reader(FileReader):
             serial=serial,
             width=sized.width,
             height=sized.height,
+            color_filter=self._stated_color_filter(by_type.get("FRME")),
             origin=f"replay:{self.path.name}",
             extra=extra,
         )
+
+    def _stated_color_filter(self, frames: StreamDescription | None) -> ColorFilter:
+        """The frame stream's ``colorFilter`` attribute, read as the APS register value.
+
+        DV's numbering of it is not documented; the register's is the likeliest. Absent (DV
+        writes none for mono sensors), the sensor is taken as mono.
+        """
+        stated = frames.info.get("colorFilter", "0") if frames is not None else "0"
+        if not stated.isdigit() or int(stated) >= len(DEVICE_COLOR_FILTERS):
+            raise FormatError(
+                f"frame stream attribute colorFilter = {stated!r} is not a colour filter "
+                f"(0-{len(DEVICE_COLOR_FILTERS) - 1})",
+                path=str(self.path),
+            )
+        return DEVICE_COLOR_FILTERS[int(stated)]
 
     def _type_of(self, stream_id: int) -> str:
         stream = self.streams.get(stream_id)

@@ -27,6 +27,7 @@ from davis_io.aedat.aedat4_streams import (
     encode_imu,
     encode_triggers,
 )
+from davis_io.colorfilter import DEVICE_COLOR_FILTERS
 from davis_io.errors import UsageError
 from davis_io.types import Closing, Frame, Packet, SourceInfo
 
@@ -75,12 +76,13 @@ class Aedat4Writer(Closing):
         self._entries: list[DataTableEntry] = []
         source = f"{info.camera}_{info.serial}" if info.serial else info.camera
         size = (info.width, info.height)
+        frames_info = {FRAME_BIT_DEPTH_KEY: frame_bit_depth}
+        if info.color_filter.is_color:  # as a DAVIS states it: the APS register value
+            frames_info["colorFilter"] = DEVICE_COLOR_FILTERS.index(info.color_filter)
         self._info_node = build_info_node(
             [
                 StreamDescription(0, "EVTS", "events", *size, source),
-                StreamDescription(
-                    1, "FRME", "frames", *size, source, {FRAME_BIT_DEPTH_KEY: frame_bit_depth}
-                ),
+                StreamDescription(1, "FRME", "frames", *size, source, frames_info),
                 StreamDescription(2, "IMUS", "imu", source=source),
                 StreamDescription(3, "TRIG", "triggers", source=source),
             ],

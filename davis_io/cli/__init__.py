@@ -7,6 +7,7 @@ Modules are imported only when their verb runs, so ``seecap inspect`` never load
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import sys
@@ -72,6 +73,9 @@ def _failure(error: BaseException, verb: str, debug: bool) -> int:
         if error.exit_status is not None:
             return error.exit_status
         return EXIT_USAGE if isinstance(error, UsageError) else EXIT_ERROR
+    if isinstance(error, OSError) and error.errno == errno.ENOSPC:
+        print(f"seecap: error: {verb}: disk full ({error}): free some space", file=sys.stderr)
+        return EXIT_ERROR
     if isinstance(error, OSError) and error.filename is not None:
         reason = error.strerror or str(error)
         print(f"seecap: error: {verb}: {error.filename}: {reason}", file=sys.stderr)

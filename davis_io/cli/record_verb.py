@@ -9,6 +9,7 @@ from pathlib import Path
 from davis_io.errors import UsageError
 from davis_io.session.defaults import DEFAULT_BINS
 from davis_io.session.units import parse_duration_us
+from davis_io.types import ColorFilter
 
 __all__ = ["HELP", "add_arguments", "run"]
 
@@ -47,6 +48,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--seed", type=int, default=0, help="with --emulate: seed of the shake, noise and sensor"
     )
+    parser.add_argument(
+        "--color-filter",
+        choices=[c.value for c in ColorFilter if c.is_color],
+        help="with --replay: the sensor's colour filter, for a file of demosaiced colour frames "
+        "that does not state it (a colour DAVIS346 is RGGB)",
+    )
     parser.add_argument("--overwrite", action="store_true", help="replace an existing session")
     parser.add_argument(
         "--preview", type=Path, help="PNG refreshed with the newest frame and its events"
@@ -60,6 +67,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.emulate is None and (args.sensor != "default" or args.seed):
         raise UsageError("--sensor and --seed choose the emulated camera: use them with --emulate")
+    if args.replay is None and args.color_filter is not None:
+        raise UsageError("--color-filter describes a replayed file's sensor: use it with --replay")
     request = CaptureRequest(
         exposure_us=_duration(args.exposure, "--exposure"),
         frame_interval_us=_duration(args.frame_interval, "--frame-interval"),
@@ -69,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
         emulate=args.emulate,
         sensor=args.sensor,
         seed=args.seed,
+        color_filter=None if args.color_filter is None else ColorFilter(args.color_filter),
     )
     if args.replay is not None and args.exposure is not None:
         print(

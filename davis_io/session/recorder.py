@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import errno
-import os
 import queue
 import shutil
 import signal
@@ -30,7 +29,7 @@ from davis_io.session.preview import preview_image, write_preview
 from davis_io.session.pump import Outcome, Progress, read_source, write_packets
 from davis_io.session.status import RecordingStatus
 from davis_io.session.sync import ExposureSync
-from davis_io.session.writer import SessionWriter
+from davis_io.session.writer import MIN_FREE_BYTES, SessionWriter
 from davis_io.types import PacketSource
 
 __all__ = ["RecordingError", "RecordingResult", "record"]
@@ -344,7 +343,8 @@ def _describe_storage_error(error: OSError, folder: Path) -> str:
     )
     if full:
         return (
-            f"the disk holding {folder} is full ({free_mb:.0f} MB free): free some space or "
-            f"record to another disk with --out ({os.strerror(errno.ENOSPC)})"
+            f"the disk holding {folder} is full ({free_mb:.0f} MB free; a recording stops with "
+            f"{MIN_FREE_BYTES / 1e6:.0f} MB still free, so that its files close intact): free "
+            "some space or record to another disk with --out"
         )
     return f"writing {folder / H5_NAME} failed ({error}); {free_mb:.0f} MB free"

@@ -36,6 +36,7 @@ from davis_io.session.manifest import (
 )
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.truth import TRUTH_DIR, Truth, load_truth
+from davis_io.session.writer import check_free_space, storage_errors
 from davis_io.types import (
     EVENT_DTYPE,
     IMU_DTYPE,
@@ -407,14 +408,22 @@ class Session(Closing):
             if bins_path(b) in h5:
                 del h5[bins_path(b)]
             group = create_bins_group(h5, b=b, width=self.width, height=self.height)
-            for start_us, end_us in zip(
-                table.exposure_start_us, table.exposure_end_us, strict=True
-            ):
-                window = self.events_between(int(start_us), int(end_us))
-                exposure = bin_exposure(
-                    window, int(start_us), int(end_us), b, self.width, self.height
-                )
-                write_bins_row(group, exposure)
+            try:
+                for start_us, end_us in zip(
+                    table.exposure_start_us, table.exposure_end_us, strict=True
+                ):
+                    check_free_space(self.folder, f"adding bins for b={b}")
+                    window = self.events_between(int(start_us), int(end_us))
+                    exposure = bin_exposure(
+                        window, int(start_us), int(end_us), b, self.width, self.height
+                    )
+                    with storage_errors(self.h5_path):
+                        write_bins_row(group, exposure)
+            except OSError as error:
+                del h5[bins_path(b)]  # never listed as stored when partial
+                raise SessionError(
+                    f"{self.h5_path}: bins for b={b} not stored: {error.strerror or error}"
+                ) from error
 
     def require_writable(self) -> None:
         """Refuse, before any work, to add to a recording that was not closed cleanly.

@@ -2,6 +2,12 @@
 
 from __future__ import annotations
 
+import errno
+import os
+import re
+import shutil
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import h5py
@@ -20,7 +26,7 @@ from davis_io.session.layout import (
 )
 from davis_io.types import Frame
 
-__all__ = ["SessionWriter"]
+__all__ = ["MIN_FREE_BYTES", "SessionWriter", "check_free_space", "storage_errors"]
 
 _DEFAULT_IMAGE_DTYPE = np.uint16
 _DEFAULT_BIT_DEPTH = 10
@@ -29,6 +35,42 @@ _EVENT_BLOCK = 1 << 18
 chunk would recompress it every time."""
 _CHUNK_CACHE_BYTES = 64 << 20
 _KINDS = ("events", "imu", "triggers")
+MIN_FREE_BYTES = 16 << 20
+"""A recording stops while this much is still free on its disk: room to store what is held,
+close ``session.h5`` and write ``session.json``. HDF5 itself cannot survive a full disk (its
+chunk writes then fail where nothing can catch them)."""
+_ERRNO = re.compile(r"errno = (\d+)")
+
+
+@contextmanager
+def storage_errors(path: Path) -> Iterator[None]:
+    """Turn HDF5's failures to write ``path`` into ``OSError`` with the C library's errno.
+
+    h5py raises a RuntimeError for a failed flush or close, the errno only in its message.
+    """
+    try:
+        yield
+    except RuntimeError as error:
+        found = _ERRNO.search(str(error))
+        number = int(found.group(1)) if found else errno.EIO
+        raise OSError(number, os.strerror(number), str(path)) from error
+
+
+def check_free_space(folder: Path, what: str) -> None:
+    """Raise ``OSError(ENOSPC)`` when less than :data:`MIN_FREE_BYTES` is free for ``folder``.
+
+    Args:
+        folder: a folder on the disk to check.
+        what: what would be written, for the message.
+    """
+    free = shutil.disk_usage(folder).free
+    if free < MIN_FREE_BYTES:
+        raise OSError(
+            errno.ENOSPC,
+            f"{free / 1e6:.1f} MB free on the disk holding {folder}, and {what} keeps "
+            f"{MIN_FREE_BYTES / 1e6:.0f} MB free to close its files intact: free some space or "
+            "write to another disk",
+        )
 
 
 class SessionWriter:
@@ -47,12 +89,15 @@ class SessionWriter:
         self.width, self.height, self.b = width, height, b
         self._held: dict[str, list[np.ndarray]] = {kind: [] for kind in _KINDS}
         self._held_events = 0
+        self._closing = False
         try:
+            check_free_space(self.path.parent, "a recording")
             self._h5 = h5py.File(self.path, "w", libver="latest", rdcc_nbytes=_CHUNK_CACHE_BYTES)
         except OSError as error:
             raise SessionError(f"cannot create {self.path}: {error}") from error
-        create_layout(self._h5, width=width, height=height, b=b)
-        self._enter_swmr()
+        with storage_errors(self.path):
+            create_layout(self._h5, width=width, height=height, b=b)
+            self._enter_swmr()
         self.events_written = 0
         self.frames_written = 0
 
@@ -68,7 +113,8 @@ class SessionWriter:
         self._held["events"].append(events)
         self._held_events += len(events)
         if self._held_events >= _EVENT_BLOCK:
-            self._spill("events")
+            with storage_errors(self.path):
+                self._spill("events")
 
     def write_imu(self, imu: np.ndarray) -> None:
         """Append IMU samples (``IMU_DTYPE``); written at the next flush."""
@@ -99,11 +145,13 @@ class SessionWriter:
                 f"frame {self.frames_written} is {frame.image.dtype}, earlier frames were "
                 f"{frames['image'].dtype}: a session holds frames of one bit depth"
             )
-        write_bins_row(self._h5[bins_path(self.b)], bins)
-        append_rows(frames["image"], frame.image[None].astype(frames["image"].dtype))
-        append_rows(frames["events_lost"], np.array([events_lost]))
-        for name in FRAME_TIMES:
-            append_rows(frames[name], np.array([getattr(frame, name)], dtype=np.int64))
+        self._check_space()
+        with storage_errors(self.path):
+            write_bins_row(self._h5[bins_path(self.b)], bins)
+            append_rows(frames["image"], frame.image[None].astype(frames["image"].dtype))
+            append_rows(frames["events_lost"], np.array([events_lost]))
+            for name in FRAME_TIMES:
+                append_rows(frames[name], np.array([getattr(frame, name)], dtype=np.int64))
         self.frames_written += 1
 
     def read_events(self, t0_us: int, t1_us: int) -> np.ndarray:
@@ -113,36 +161,45 @@ class SessionWriter:
 
     def flush(self) -> None:
         """Write everything held and make it durable and visible to readers."""
-        for kind in _KINDS:
-            self._spill(kind)
-        self._h5.flush()
+        with storage_errors(self.path):
+            for kind in _KINDS:
+                self._spill(kind)
+            self._h5.flush()
 
     def close(self) -> None:
         """Write what is still held, flush and close the file (idempotent).
 
-        A session without frames still gets its (empty, 16-bit) ``/frames/image``.
+        A session without frames still gets its (empty, 16-bit) ``/frames/image``. What is
+        held is written even below the free-space margin: the margin is there for it.
         """
+        self._closing = True
         if not self._h5.id.valid:
             return
-        try:
-            self.flush()
-            if "image" not in self._columns["frames"]:
-                self._add_image_dataset(_DEFAULT_IMAGE_DTYPE, _DEFAULT_BIT_DEPTH)
-        finally:
-            if self._h5.id.valid:
-                self._h5.close()
+        with storage_errors(self.path):
+            try:
+                self.flush()
+                if "image" not in self._columns["frames"]:
+                    self._add_image_dataset(_DEFAULT_IMAGE_DTYPE, _DEFAULT_BIT_DEPTH)
+            finally:
+                if self._h5.id.valid:
+                    self._h5.close()
 
     def _spill(self, kind: str) -> None:
         """Append the held records of one kind to their datasets."""
         held = self._held[kind]
         if not held:
             return
+        self._check_space()
         self._held[kind] = []
         for name, dataset in self._columns[kind].items():
             append_rows(dataset, np.concatenate([records[name] for records in held]))
         if kind == "events":
             self._held_events = 0
             self.events_written += sum(len(records) for records in held)
+
+    def _check_space(self) -> None:
+        if not self._closing:
+            check_free_space(self.path.parent, "a recording")
 
     def _enter_swmr(self) -> None:
         self._h5.swmr_mode = True

@@ -10,8 +10,9 @@ import usb.backend
 import usb.core
 import usb.util
 
+from davis_io.colorfilter import DEVICE_COLOR_FILTERS
 from davis_io.errors import DeviceError
-from davis_io.types import ColorFilter, Packet, SourceInfo
+from davis_io.types import Packet, SourceInfo
 from davis_io.usb import protocol as P
 from davis_io.usb.config import DavisConfig, DeviceFacts, config_writes, with_chip_biases
 from davis_io.usb.control import ControlPort, device_error
@@ -21,18 +22,6 @@ from davis_io.usb.reader import StreamReader
 
 __all__ = ["DavisCamera", "open_camera"]
 
-_COLOR_FILTERS = [
-    ColorFilter.MONO,
-    ColorFilter.RGBG,
-    ColorFilter.GRGB,
-    ColorFilter.GBGR,
-    ColorFilter.BGRG,
-    ColorFilter.RGBW,
-    ColorFilter.GRWB,
-    ColorFilter.WBGR,
-    ColorFilter.BWRG,
-]
-"""APS COLOR_FILTER register value -> pattern."""
 _PRODUCERS_OFF = [
     (P.Module.DVS, P.Dvs.RUN),
     (P.Module.APS, P.Aps.RUN),
@@ -160,7 +149,7 @@ class DavisCamera:
 
     def _source_info(self) -> SourceInfo:
         facts = self.facts
-        if self.color_register >= len(_COLOR_FILTERS):
+        if self.color_register >= len(DEVICE_COLOR_FILTERS):
             raise DeviceError(
                 f"DAVIS serial {self.serial}: unknown colour filter register "
                 f"value {self.color_register}"
@@ -170,7 +159,7 @@ class DavisCamera:
             serial=self.serial,
             width=facts.layout.width,
             height=facts.layout.height,
-            color_filter=_COLOR_FILTERS[self.color_register],
+            color_filter=DEVICE_COLOR_FILTERS[self.color_register],
             origin="usb",
             firmware_version=self.device.bcdDevice & 0xFF,
             logic_version=self.logic_version,

@@ -12,6 +12,7 @@ import numpy as np
 import usb.core
 
 from davis_io.chips import SENSOR_SIZES
+from davis_io.colorfilter import DEVICE_COLOR_FILTERS
 from davis_io.types import ColorFilter, PacketSource
 from davis_io.usb import protocol as P
 from davis_io.usb.emulated_stream import SourceWords, StreamChunk, StreamFaults
@@ -26,13 +27,6 @@ _USB_ERRORS = {
     "gone": ("No such device (it may have been disconnected)", -4, errno.ENODEV),
     "access": ("Access denied (insufficient permissions)", -3, errno.EACCES),
     "busy": ("Resource busy", -6, errno.EBUSY),
-}
-_COLOR_FILTER_REGISTER = {
-    ColorFilter.MONO: 0,
-    ColorFilter.RGBG: 1,
-    ColorFilter.GRGB: 2,
-    ColorFilter.GBGR: 3,
-    ColorFilter.BGRG: 4,
 }
 
 
@@ -69,7 +63,7 @@ def _default_registers(color_filter: ColorFilter) -> dict[tuple[int, int], int]:
         (P.Module.DVS, P.Dvs.SIZE_ROWS): rows,
         (P.Module.APS, P.Aps.SIZE_COLUMNS): columns,
         (P.Module.APS, P.Aps.SIZE_ROWS): rows,
-        (P.Module.APS, P.Aps.COLOR_FILTER): _COLOR_FILTER_REGISTER[color_filter],
+        (P.Module.APS, P.Aps.COLOR_FILTER): DEVICE_COLOR_FILTERS.index(color_filter),
         (P.Module.APS, P.Aps.HAS_GLOBAL_SHUTTER): 1,
         (P.Module.IMU, P.Imu.TYPE): 1,
         (P.Module.IMU, P.Imu.ACCEL_FULL_SCALE): 1,

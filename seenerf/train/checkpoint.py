@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 from pathlib import Path
 
 import torch
@@ -30,8 +31,18 @@ def save_checkpoint(path: Path, trainer) -> None:
         "history": json.dumps(summary.history),
     }
     temporary = path.with_suffix(".tmp")
-    torch.save(state, temporary)
-    os.replace(temporary, path)
+    try:
+        torch.save(state, temporary)
+        os.replace(temporary, path)
+    except (OSError, RuntimeError) as error:  # torch reports a full disk as a RuntimeError
+        temporary.unlink(missing_ok=True)
+        free_mb = shutil.disk_usage(path.parent).free / 1e6
+        kept = "the previous checkpoint is kept" if path.exists() else "no checkpoint was kept"
+        raise CheckpointError(
+            f"cannot write the checkpoint {path} ({free_mb:.0f} MB free on its disk: "
+            f"{str(error).splitlines()[0]}); {kept}: free some space and run the fit again to "
+            "resume"
+        ) from error
 
 
 def _read(path: Path) -> dict:

@@ -122,4 +122,4 @@ def test_channel_render_equals_the_filtered_rgb_render(color_filter):
     expected = through_filter(radiance, filter_weights(color_filter, 260, 346))
     channels = filter_channels(color_filter, 260, 346)
     np.testing.assert_allclose(scene.render_channel(DAVIS, pose, channels), expected, rtol=1e-5)
-    assert filter_channels(ColorFilter.RGBW, 4, 4) is None
+    assert filter_channels(ColorFilter.RGWB, 4, 4) is None

@@ -32,7 +32,7 @@ def test_bayer_mosaic_is_demosaiced_after_the_edi():
     assert first[1, 1, 0] == 133 and last[1, 1, 0] == 255
     assert first[1, 1, 2] == 0  # no blue anywhere
     with pytest.raises(UsageError, match="demosaiced"):
-        latent_images(frame_of(mosaic, 8), counts, [0.5, 0.5], 0.3, ColorFilter.RGBW)
+        latent_images(frame_of(mosaic, 8), counts, [0.5, 0.5], 0.3, ColorFilter.RGWB)
 
 
 def test_response_curve_runs_the_edi_on_linear_values():

@@ -253,3 +253,24 @@ def test_whole_image_ldr_matches_the_response_per_pixel():
         for image, exposure in zip(tabulated, exposures, strict=True):
             direct = model.ldr_from_log(log_radiance, exposure)
             assert (image - direct).abs().max() < 1e-3
+
+
+def test_a_full_disk_keeps_the_previous_checkpoint(tiny_scene, tmp_path, monkeypatch):
+    from seenerf.train.checkpoint import save_checkpoint
+
+    trainer = Trainer(tiny_scene, _config(steps=2), tmp_path, log=lambda line: None)
+    trainer.train()
+    before = (tmp_path / "checkpoint.pt").read_bytes()
+
+    def disk_full(state, path):
+        path.write_bytes(b"half")  # torch had begun the file
+        raise RuntimeError("PytorchStreamWriter failed writing file data/0: file write failed")
+
+    monkeypatch.setattr(torch, "save", disk_full)
+    with pytest.raises(CheckpointError, match="previous checkpoint is kept.*to resume"):
+        save_checkpoint(tmp_path / "checkpoint.pt", trainer)
+    assert (tmp_path / "checkpoint.pt").read_bytes() == before
+    assert not (tmp_path / "checkpoint.tmp").exists()
+    monkeypatch.undo()
+    resumed = Trainer(tiny_scene, _config(steps=3), tmp_path, log=lambda line: None)
+    assert resumed.train().steps == 3  # resumed from step 2, one more step

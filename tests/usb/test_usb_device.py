@@ -110,9 +110,9 @@ def test_permission_error_prints_the_sudo_line():
 
 
 def test_info_reads_the_colour_filter_and_sizes():
-    camera = open_camera(backend=EmulatedBackend(EmulatedDavis346(color_filter=ColorFilter.RGBG)))
+    camera = open_camera(backend=EmulatedBackend(EmulatedDavis346(color_filter=ColorFilter.RGGB)))
     camera.close()
-    assert camera.info.color_filter is ColorFilter.RGBG
+    assert camera.info.color_filter is ColorFilter.RGGB
     assert (camera.info.camera, camera.info.width, camera.info.height) == ("DAVIS346", 346, 260)
     assert (camera.info.firmware_version, camera.info.logic_version) == (6, 18)
 

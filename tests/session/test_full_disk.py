@@ -1,0 +1,95 @@
+"""A disk that fills while recording or adding bins: a readable session, one line, exit 1."""
+
+import itertools
+import shutil
+import subprocess
+import sys
+from collections import namedtuple
+from pathlib import Path
+
+import pytest
+from session_fakes import ListSource, endless_packets
+
+import davis_io.session.writer as writer_module
+from davis_io.cli import main
+from davis_io.errors import SessionError
+from davis_io.session import Session
+from davis_io.session.recorder import RecordingError, record
+
+Usage = namedtuple("Usage", "total used free")
+
+
+def _disk_filling_after(monkeypatch, checks: int) -> None:
+    """The free space reported drops below the margin after ``checks`` checks."""
+    seen = []
+    real = shutil.disk_usage
+
+    def disk_usage(path):
+        seen.append(path)
+        usage = real(path)
+        free = usage.free if len(seen) <= checks else writer_module.MIN_FREE_BYTES - 1
+        return Usage(usage.total, usage.total - free, free)
+
+    monkeypatch.setattr(writer_module.shutil, "disk_usage", disk_usage)
+
+
+def test_a_recording_stops_before_the_disk_is_full(tmp_path, monkeypatch):
+    _disk_filling_after(monkeypatch, 40)
+    with pytest.raises(RecordingError, match=r"is full \(\d+ MB free; a recording stops") as caught:
+        record(ListSource(endless_packets(True)), tmp_path / "s")
+    monkeypatch.undo()
+    result = caught.value.result
+    with Session.open(tmp_path / "s") as session:
+        assert not session.needs_repair
+        assert session.manifest.status == "interrupted"
+        assert "is full" in session.manifest.stop_reason
+        assert session.frame_count == result.manifest.frame_count > 0
+        assert session.event_count == result.manifest.event_count > 0
+        assert session.bins(4).raw.shape[0] == session.frame_count
+
+
+def test_bins_on_a_full_disk_are_not_listed_as_stored(tmp_path, monkeypatch, capsys):
+    folder = tmp_path / "s"
+    record(ListSource(itertools.islice(endless_packets(True), 40)), folder)  # 20 frames
+    _disk_filling_after(monkeypatch, 5)
+    assert main(["bins", str(folder), "--bins", "6"]) == 1
+    err = capsys.readouterr().err
+    assert "bins for b=6 not stored" in err and "MB free" in err and len(err.splitlines()) == 1
+    monkeypatch.undo()
+    with Session.open(folder) as session:
+        assert 6 not in session.stored_bins() and session.has_bins(4)
+    with pytest.raises(SessionError, match="free"):
+        _disk_filling_after(monkeypatch, 0)
+        with Session.open(folder) as session:
+            session.bins(6)
+
+
+RECORD_FOREVER = Path(__file__).with_name("record_forever.py")
+
+
+def test_a_real_small_disk_through_the_recorder(tmp_path):
+    mount = tmp_path / "small"
+    mount.mkdir()
+    size_mb = writer_module.MIN_FREE_BYTES // 2**20 + 8
+    mounted = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={size_mb}m", "tmpfs", str(mount)],
+        capture_output=True,
+        check=False,
+    )
+    if mounted.returncode != 0:
+        pytest.skip("no tmpfs can be mounted here (needs root); the injected tests cover it")
+    try:
+        done = subprocess.run(
+            [sys.executable, str(RECORD_FOREVER), str(mount / "s")],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            check=False,
+        )
+        assert done.returncode == 1, done.stderr
+        assert "is full" in done.stderr.splitlines()[-1]
+        with Session.open(mount / "s") as session:
+            assert session.manifest.status == "interrupted" and session.frame_count > 0
+            assert session.event_count == session.manifest.event_count
+    finally:
+        subprocess.run(["umount", str(mount)], check=False)
