@@ -34,11 +34,11 @@ bench-quick: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python tools/bench.py --publish
-	$(BIN)/python tools/bench_blind.py --publish
+	$(BIN)/python tools/bench_blind.py --jobs 2 --publish
 
 # The blind-camera benchmark alone: six randomly drawn sensors, each fitted from its recording.
 bench-blind: $(STAMP)
-	$(BIN)/python tools/bench_blind.py --publish
+	$(BIN)/python tools/bench_blind.py --jobs 2 --publish
 
 lint: $(STAMP)
 	$(BIN)/pip install -q ruff
