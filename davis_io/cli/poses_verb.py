@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from davis_io.session.defaults import DEFAULT_BINS
@@ -42,9 +43,9 @@ class _StageBars:
         if stage != self.stage:
             self.close()
             self.stage = stage
-            self.bar = tqdm(total=total or None, desc=stage, unit="img", leave=True)
-        self.bar.n = done
-        self.bar.refresh()
+            interval = 0.5 if sys.stderr.isatty() else 30.0  # a log file: a line per 30 s
+            self.bar = tqdm(total=total or None, desc=stage, unit="img", mininterval=interval)
+        self.bar.update(done - self.bar.n)
 
     def close(self) -> None:
         if self.bar is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from davis_io.session import seconds_argument
@@ -62,15 +63,19 @@ class _TrainingBar:
         if self.bar is None:
             total = round(budget) if by_time else trainer.total_steps
             unit = "s" if by_time else "step"
-            self.bar = tqdm(total=total, unit=unit, desc="training", dynamic_ncols=True)
-        self.bar.n = (
+            # A log file gets a line every 30 s, not one per step.
+            interval = 0.5 if sys.stderr.isatty() else 30.0
+            self.bar = tqdm(
+                total=total, unit=unit, desc="training", dynamic_ncols=True, mininterval=interval
+            )
+        done = (
             min(round(trainer.summary.elapsed_s), self.bar.total)
             if by_time
             else (trainer.summary.steps)
         )
         rate = trainer.summary.steps / max(trainer.summary.elapsed_s, 1e-9)
         self.bar.set_postfix_str(f"step {trainer.summary.steps}, {rate:.1f} steps/s", refresh=False)
-        self.bar.refresh()
+        self.bar.update(done - self.bar.n)  # drawn at most once per interval
 
     def close(self) -> None:
         if self.bar is not None:
