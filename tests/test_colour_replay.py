@@ -56,4 +56,3 @@ def test_a_demosaiced_colour_recording_fits_in_colour(tmp_path):
     assert result.summary.steps == 3 and result.summary.skipped_steps == 0
     pngs = sorted((result.run_dir / "renders").rglob("*.png"))
     assert pngs and all(cv2.imread(str(p), cv2.IMREAD_UNCHANGED).ndim == 3 for p in pngs)
-

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import math
+import shutil
 from pathlib import Path
 
 import cv2
@@ -24,8 +26,11 @@ def write_exr(path: Path, image: np.ndarray, metadata: dict[str, str | float]) -
     name = "RGB" if image.shape[-1] == 3 else "Y"
     pixels = np.ascontiguousarray(image if name == "RGB" else image[..., 0], np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **metadata}
-    with OpenEXR.File(header, {name: pixels}) as exr:
-        exr.write(str(path))
+    try:
+        with OpenEXR.File(header, {name: pixels}) as exr:
+            exr.write(str(path))
+    except (OSError, RuntimeError) as error:  # OpenEXR reports a full disk as a RuntimeError
+        raise _not_written(path, str(error)) from error
 
 
 def write_png(path: Path, image: np.ndarray) -> None:
@@ -34,7 +39,20 @@ def write_png(path: Path, image: np.ndarray) -> None:
     pixels = np.round(np.clip(image, 0.0, 1.0) * 255).astype(np.uint8)
     if pixels.ndim == 3 and pixels.shape[-1] == 3:
         pixels = pixels[..., ::-1]
-    cv2.imwrite(str(path), np.ascontiguousarray(pixels.squeeze()))
+    if not cv2.imwrite(str(path), np.ascontiguousarray(pixels.squeeze())):
+        raise _not_written(path, "OpenCV could not write it")
+
+
+def _not_written(path: Path, why: str) -> OSError:
+    """The error for an image that was not written, with the free space of its disk."""
+    free_mb = shutil.disk_usage(path.parent).free / 1e6
+    full = free_mb < 1.0
+    return OSError(
+        errno.ENOSPC if full else errno.EIO,
+        f"not written ({why.splitlines()[0] if why else 'unknown'}; {free_mb:.0f} MB free on its "
+        "disk): free some space, then render the run again with `seecap render`",
+        str(path),
+    )
 
 
 def tone_mapped_preview(hdr: np.ndarray) -> np.ndarray:
