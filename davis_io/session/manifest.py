@@ -188,32 +188,17 @@ class SessionManifest:
 
 
 _REQUIRED = ("camera", "serial", "width", "height", "color_filter", "source", "b")
-_INT, _STR, _OPTIONAL_INT = (int,), (str,), (int, type(None))
-_FIELD_TYPES: dict[str, tuple[type, ...]] = {
-    **dict.fromkeys(("width", "height", "b", "frame_count", "event_count"), _INT),
-    **dict.fromkeys(("format_version",), _INT),
-    **dict.fromkeys(
-        ("firmware_version", "logic_version", "exposure_requested_us", "exposure_measured_us"),
-        _OPTIONAL_INT,
-    ),
-    **dict.fromkeys(
-        (
-            "camera",
-            "serial",
-            "color_filter",
-            "source",
-            "start_time_utc",
-            "stop_time_utc",
-            "status",
-            "stop_reason",
-            "tool_version",
-        ),
-        _STR,
-    ),
-    "device_config": (dict,),
-    "source_notes": (list,),
+_JSON_TYPES: dict[str, tuple[type, ...]] = {
+    "int": (int,),
+    "str": (str,),
+    "int | None": (int, type(None)),
+    "dict": (dict,),
+    "list[str]": (list,),
 }
-"""The JSON types each field may hold (``drops`` is checked on its own)."""
+"""The JSON types a field's annotation allows (``drops`` is checked on its own)."""
+_FIELD_TYPES = {
+    f.name: _JSON_TYPES[f.type] for f in dataclasses.fields(SessionManifest) if f.name != "drops"
+}
 
 
 def _check_types(values: dict, types: dict[str, tuple[type, ...]], where: str) -> None:
