@@ -59,8 +59,8 @@ def synthetic_recording(
         [(1 - p) * texture[:, c] + p * texture[:, c + 1] for c, p in zip(left, part, strict=True)]
     )  # (T, H, W)
     size = (HEIGHT, WIDTH)
-    theta_on = np.maximum(rng.normal(sensor.threshold_on, sensor.spread, size), 0.05)
-    theta_off = np.maximum(rng.normal(sensor.threshold_off, sensor.spread, size), 0.05)
+    theta_on = np.maximum(rng.normal(sensor.threshold_on, sensor.spread, size), 0.02)
+    theta_off = np.maximum(rng.normal(sensor.threshold_off, sensor.spread, size), 0.02)
     events = _ideal_events(log_radiance, times, theta_on, theta_off)
     starts = 10_000 + np.arange(frames) * interval_us
     images = []

@@ -63,6 +63,18 @@ def test_the_inverse_response_rises_and_matches_the_true_shape(calibrated):
     assert np.max(np.abs(departure)) < 0.08 * span
 
 
+def test_pixels_far_below_the_median_threshold_do_not_drag_the_thresholds_down():
+    # OFF thresholds of 0.16 spread by 0.06: some pixels fire at a quarter of the median
+    # threshold or less, and each of their pairs counts four times the events.
+    sensor = KnownSensor(0.45, 0.16, 0.06, FAMILIES["film"])
+    recording, theta_on, theta_off = synthetic_recording(sensor, seed=3)
+    assert np.mean(theta_off < 0.3 * np.median(theta_off)) > 0.005
+    calibration = calibrate_frames(recording)
+    assert calibration.threshold_on == pytest.approx(np.median(theta_on), rel=0.08)
+    assert calibration.threshold_off == pytest.approx(np.median(theta_off), rel=0.08)
+    assert calibration.residual_events < 1.0
+
+
 def test_late_events_are_measured_as_late():
     recording, _, _ = synthetic_recording(KnownSensor(0.25, 0.35, 0.02, FAMILIES["film"]))
     late = dataclasses.replace(recording, times_us=recording.times_us + 5000)
