@@ -178,3 +178,30 @@ def test_function_local_imports_of_seenerf_say_why():
                     "#"
                 )
                 assert said, f"{name} line {node.lineno}: local import without a reason"
+
+
+def _variant_name_comparisons(tree: ast.AST, names: set[str]) -> list[int]:
+    """Lines comparing anything with a string that is a variant's name (==, !=, in)."""
+    lines = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            operands = [node.left, *node.comparators]
+            if any(isinstance(o, ast.Constant) and o.value in names for o in operands):
+                lines.append(node.lineno)
+    return lines
+
+
+def test_no_code_branches_on_a_variant_name_outside_the_registry():
+    from seenerf.model.variants import VARIANTS
+
+    registry = ROOT / "seenerf" / "model" / "variants.py"
+    sources = [p for d in ("seenerf", "davis_io", "tools") for p in (ROOT / d).rglob("*.py")]
+    found = {
+        str(path.relative_to(ROOT)): lines
+        for path in sources
+        if path != registry
+        and (lines := _variant_name_comparisons(ast.parse(path.read_text()), set(VARIANTS)))
+    }
+    assert found == {}, "variants carry objects for what they do; compare those, not names"
+    planted = ast.parse('if config.variant == "oracle":\n    pass\n')
+    assert _variant_name_comparisons(planted, set(VARIANTS)) == [1]

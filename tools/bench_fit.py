@@ -27,7 +27,7 @@ from davis_io.poses.truth import store_true_poses
 from davis_io.session import DEFAULT_BINS
 from seenerf.data.session import load_training_data
 from seenerf.data.synthetic import plane_scene
-from seenerf.model.config import FitConfig
+from seenerf.model.config import DEFAULT_VARIANT, FitConfig
 from seenerf.model.presets import DEFAULT_PRESET
 from seenerf.train.fit import ensure_poses, fit_data
 from seenerf.train.trainer import Trainer
@@ -146,7 +146,7 @@ def quality(
             session_dir / "fit" / f"bench-{preset}-{variant}",
             fresh=True,
             log=print,
-            spent_s=poses_s if variant == "full" else 0.0,
+            spent_s=poses_s if variant == DEFAULT_VARIANT else 0.0,
         )
         m = run.metrics
         results[variant] = {

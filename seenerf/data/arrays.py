@@ -96,6 +96,8 @@ class TrainingData:
         monochrome: the sensor has no colour filter: renders are luminance, one channel.
         threshold: the unit of ``bins``: the mean of the calibrated ON and OFF thresholds.
         cutoff_hz: the photoreceptor cut-off the calibration knows, or 0 (the config's then).
+        linear_levels: ``(black, saturation)`` normalised, when the calibration measured frames
+            linear in exposure (a raw DAVIS frame); None otherwise.
         test: held-out views with truth, if any.
         truth: training-view truth, if any (emulated sessions).
     """
@@ -113,6 +115,7 @@ class TrainingData:
     monochrome: bool = False
     threshold: float = 0.3
     cutoff_hz: float = 0.0
+    linear_levels: tuple[float, float] | None = None
     test: TestViews | None = None
     truth: TrainTruth | None = None
 

@@ -102,6 +102,9 @@ def load_training_data(
             monochrome=not session.color_filter.is_color,
             threshold=calibration.threshold,
             cutoff_hz=calibration.cutoff_hz,
+            linear_levels=(calibration.black_level, calibration.saturation)
+            if calibration.response_linear
+            else None,
         )
         truth = session.truth()
         if truth is not None:

@@ -10,7 +10,10 @@ from pathlib import Path
 from seenerf.errors import ConfigError
 from seenerf.model.presets import DEFAULT_PRESET, PRESETS
 
-__all__ = ["FitConfig", "load_config", "save_config"]
+__all__ = ["DEFAULT_VARIANT", "FitConfig", "load_config", "save_config"]
+
+DEFAULT_VARIANT = "full"
+"""The paper's method: what a fit runs unless told otherwise and what benchmarks measure."""
 
 
 @dataclass
@@ -33,6 +36,9 @@ class FitConfig:
         anchor_weight: weight of the CRF anchor term.
         anchor_log_exposure: ln(radiance x s) of the CRF anchor point.
         anchor_value: LDR value of the CRF at the anchor point.
+        response: the RGB response of the variants that learn one: ``auto`` (linear above the
+            black level and clipped, when the calibration measured the frames linear as a raw
+            DAVIS frame is; else learned) or ``learned`` (always the response MLPs).
         threshold: DVS contrast threshold Theta in log units for ON, OFF and every pixel,
             overriding the ones measured from the recording (0: measured; the events alone set
             the field's log contrast).
@@ -54,7 +60,7 @@ class FitConfig:
     """
 
     preset: str = DEFAULT_PRESET
-    variant: str = "full"
+    variant: str = DEFAULT_VARIANT
     steps: int = 0
     time_budget_s: float = 0.0
     device: str = "auto"
@@ -65,6 +71,7 @@ class FitConfig:
     anchor_weight: float = 0.5
     anchor_log_exposure: float = 0.0
     anchor_value: float = 0.5
+    response: str = "learned"
     threshold: float = 0.0
     cutoff_hz: float = 150.0
     event_share: float = 0.5
@@ -95,6 +102,8 @@ class FitConfig:
                 raise ConfigError(
                     f"{name} {getattr(self, name)!r} is unknown; choose one of: {', '.join(table)}"
                 )
+        if self.response not in ("auto", "learned"):
+            raise ConfigError(f"response {self.response!r} is unknown; choose auto or learned")
         if self.device not in ("auto", "cpu", "cuda"):
             raise ConfigError(f"device {self.device!r} is unknown; choose auto, cpu or cuda")
         if self.steps < 0 or self.time_budget_s < 0 or self.bins < 0:
@@ -121,6 +130,7 @@ class FitConfig:
             "anchor_weight",
             "anchor_log_exposure",
             "anchor_value",
+            "response",
             "threshold",
             "cutoff_hz",
             "event_share",

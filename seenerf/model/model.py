@@ -34,7 +34,8 @@ class SeeNerfModel(nn.Module):
         event_spec: the event model (the variant's, possibly with another low-pass reading).
         near: near depth; ``far`` far depth.
         reference_exposure_s: exposure of the training frames (for the LDR-field variant).
-        crf_args: keyword arguments of the RGB CRF; ``event_args`` of the event CRF.
+        crf: the RGB response (built for the session: :func:`seenerf.train.builder.rgb_response`)
+            or None; ``event_args``: keyword arguments of the event CRF.
     """
 
     def __init__(
@@ -45,7 +46,7 @@ class SeeNerfModel(nn.Module):
         near: float,
         far: float,
         reference_exposure_s: float,
-        crf_args: dict,
+        crf: nn.Module | None,
         event_args: dict,
     ):
         super().__init__()
@@ -53,7 +54,7 @@ class SeeNerfModel(nn.Module):
         self.variant = variant
         self.near, self.far = near, far
         self.reference_exposure_s = reference_exposure_s
-        self.crf = variant.crf(**crf_args) if variant.crf is not None else None
+        self.crf = crf
         self.event_crf = EventCrf(event_spec, **event_args) if event_spec is not None else None
 
     def warm_start(self, steps: int, seed: int) -> None:

@@ -8,7 +8,10 @@ import torch
 import torch.nn.functional as F  # noqa: N812
 from torch import nn
 
+from seenerf.errors import ConfigError
+
 __all__ = [
+    "LinearCrf",
     "PowerCrf",
     "RgbCrf",
     "TabulatedCrf",
@@ -130,6 +133,51 @@ class PowerCrf(nn.Module):
     def anchor_loss(self) -> torch.Tensor:
         """The power curve has no free offset to anchor; zero."""
         return self.exponent.new_zeros(())
+
+    def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
+        """Nothing to warm up."""
+        return 0.0
+
+
+class LinearCrf(nn.Module):
+    """A raw frame's response: linear in exposure above a black level, clipped at saturation.
+
+    Nothing to learn: the field's scale is the slope. ``black + (anchor_value - black) x`` with
+    ``x`` the exposure over the anchor's, so the anchor maps to ``anchor_value`` as the learned
+    curve's does; at most ``saturation`` (no gradient beyond, as a clipped pixel says only that
+    it is at least that bright).
+
+    Args:
+        black: normalised value of no light; ``saturation`` where the pixel clips.
+        anchor_log_exposure: ln(radiance x seconds) of the anchor point.
+        anchor_value: LDR value at the anchor point.
+    """
+
+    def __init__(
+        self,
+        black: float,
+        saturation: float,
+        anchor_log_exposure: float = 0.0,
+        anchor_value: float = 0.5,
+    ):
+        super().__init__()
+        if not 0.0 <= black < min(anchor_value, saturation):
+            raise ConfigError(
+                f"the measured black level {black:.3f} is not below the anchor value "
+                f"{anchor_value} and the clip level {saturation:.3f}; fit with --response learned"
+            )
+        self.black, self.saturation = float(black), float(saturation)
+        self.anchor_log_exposure = float(anchor_log_exposure)
+        self.slope = float(anchor_value) - self.black
+
+    def forward(self, log_exposure: torch.Tensor) -> torch.Tensor:
+        """LDR value of each channel from ln(radiance x seconds)."""
+        linear = self.black + self.slope * torch.exp(log_exposure - self.anchor_log_exposure)
+        return linear.clamp(max=self.saturation)
+
+    def anchor_loss(self) -> torch.Tensor:
+        """The anchor holds by construction; zero."""
+        return torch.zeros(())
 
     def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
         """Nothing to warm up."""

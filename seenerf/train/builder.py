@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 import torch
+from torch import nn
 
 from seenerf.data.arrays import TrainingData
 from seenerf.data.frames import truth_to_fit_frame
@@ -17,9 +18,9 @@ from seenerf.model.variants import LOW_PASS_READINGS, get_variant
 from seenerf.render.frustum import forward_facing_space, frustum_box
 from seenerf.render.rays import in_any_view, scene_box_from_cameras
 from seenerf.render.renderer import RadianceRenderer
-from seenerf.sensors.rgb_crf import TabulatedCrf
+from seenerf.sensors.rgb_crf import LinearCrf, RgbCrf, TabulatedCrf
 
-__all__ = ["build_model", "resolve_device", "training_frame"]
+__all__ = ["build_model", "resolve_device", "rgb_response", "training_frame"]
 
 
 def resolve_device(name: str) -> str:
@@ -37,13 +38,29 @@ def resolve_device(name: str) -> str:
     return name
 
 
-def crf_arguments(crf: type | None, data: TrainingData, config: FitConfig) -> dict:
-    """Keyword arguments of the variant's RGB response: the anchor, or the truth's table."""
+def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.Module | None:
+    """The variant's RGB response for this session.
+
+    The truth's table for the oracle; for the learned response, the linear one instead when
+    the calibration measured linear frames (a raw DAVIS frame) and ``config.response`` is
+    ``auto``; else the variant's class with the anchor.
+
+    Raises:
+        ConfigError: the oracle's session has no true response.
+    """
+    if crf is None:
+        return None
     if crf is TabulatedCrf:
         if data.truth is None or not len(data.truth.crf_value):
             raise ConfigError("the true response is unknown: this session's truth has no crf/")
-        return {"log_exposure": data.truth.crf_log_exposure, "values": data.truth.crf_value}
-    return {"anchor_log_exposure": config.anchor_log_exposure, "anchor_value": config.anchor_value}
+        return TabulatedCrf(data.truth.crf_log_exposure, data.truth.crf_value)
+    anchor = {
+        "anchor_log_exposure": config.anchor_log_exposure,
+        "anchor_value": config.anchor_value,
+    }
+    if crf is RgbCrf and config.response == "auto" and data.linear_levels is not None:
+        return LinearCrf(*data.linear_levels, **anchor)
+    return crf(**anchor)
 
 
 def training_frame(data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
@@ -118,7 +135,7 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
         float(bounds[0]),
         float(bounds[1]),
         float(np.median(data.exposure_s)),
-        crf_args=crf_arguments(variant.crf, data, config),
+        crf=rgb_response(variant.crf, data, config),
         event_args={
             "threshold": data.threshold,
             "cutoff_hz": data.cutoff_hz or config.cutoff_hz,

@@ -20,6 +20,7 @@ from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
 from seenerf.model.config import FitConfig, save_config
 from seenerf.model.variants import get_variant
+from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.trainer import Trainer, TrainSummary
 
 __all__ = ["FitResult", "fit_data", "fit_session", "resolved_settings", "session_bins"]
@@ -101,6 +102,7 @@ def resolved_settings(trainer: Trainer) -> dict:
         "space": "ndc" if renderer.space is not None else "world",
         "event_threshold": trainer.data.threshold,
         "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.cutoff_hz,
+        "rgb_response": type(trainer.model.crf).__name__ if trainer.model.crf else None,
     }
 
 
@@ -141,6 +143,12 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         f"image motion between latent poses: median {travel_px:.1f} px at the mean depth; "
         f"{config.subframes} pose(s) per bin in the blur integral"
     )
+    if isinstance(trainer.model.crf, LinearCrf):
+        crf = trainer.model.crf
+        log(
+            f"frames measured linear: response linear above black {crf.black:.3f}, clipped at "
+            f"{crf.saturation:.3f} (--response learned learns it instead)"
+        )
     save_config(config, run_dir / "config.json", resolved_settings(trainer))
     summary = trainer.train()
     log(

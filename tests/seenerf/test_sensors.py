@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import torch
 
+from seenerf.errors import ConfigError
 from seenerf.sensors.event_crf import (
     EventCrf,
     EventModelSpec,
@@ -14,6 +15,7 @@ from seenerf.sensors.event_crf import (
 )
 from seenerf.sensors.exposure import blur_log_radiance
 from seenerf.sensors.rgb_crf import (
+    LinearCrf,
     PowerCrf,
     RgbCrf,
     TabulatedCrf,
@@ -57,6 +59,19 @@ def test_tabulated_crf_interpolates_each_channel_and_holds_its_ends():
     # the way from 0.4 to 0.8.
     assert crf(u).tolist() == [pytest.approx([0.25, 0.6, 0.8]), pytest.approx([0.0, 0.3, 0.5])]
     assert crf.anchor_loss() == 0 and not list(crf.parameters())
+
+
+def test_linear_crf_hand_values_and_no_gradient_where_it_clips():
+    crf = LinearCrf(0.05, 0.9, anchor_log_exposure=0.0, anchor_value=0.5)
+    # x = 1 is the anchor: 0.5; x = 0.5: 0.05 + 0.45 / 2; x = 4: 0.05 + 1.8 clips at 0.9.
+    u = torch.log(torch.tensor([[1.0, 0.5, 4.0]])).requires_grad_()
+    out = crf(u)
+    assert out[0].tolist() == pytest.approx([0.5, 0.275, 0.9])
+    out.sum().backward()
+    assert u.grad[0].tolist() == pytest.approx([0.45, 0.225, 0.0])  # d/d ln x = 0.45 x
+    assert crf.anchor_loss() == 0 and not list(crf.parameters())
+    with pytest.raises(ConfigError, match="--response learned"):
+        LinearCrf(0.6, 0.9)
 
 
 def test_rgb_crf_warm_start_reaches_reference_curve():

@@ -50,6 +50,23 @@ def test_every_variant_trains_a_few_steps(variant, tiny_scene):
     assert _parameters_changed(trainer, before)
 
 
+def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked():
+    from seenerf.sensors.rgb_crf import LinearCrf, PowerCrf, RgbCrf
+
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
+    scene.linear_levels = (0.02, 0.9)
+    auto = {"response": "auto"}
+    model, _ = build_model(scene, _config(**auto), "cpu")
+    assert isinstance(model.crf, LinearCrf) and model.crf.black == 0.02
+    assert isinstance(build_model(scene, _config(response="learned"), "cpu")[0].crf, RgbCrf)
+    power = build_model(scene, _config(variant="power-crf", **auto), "cpu")[0]
+    assert isinstance(power.crf, PowerCrf)
+    trainer = Trainer(scene, _config(**auto), log=lambda line: None)
+    assert trainer.train().skipped_steps == 0
+    scene.linear_levels = None
+    assert isinstance(build_model(scene, _config(**auto), "cpu")[0].crf, RgbCrf)
+
+
 def test_multi_exposure_needs_and_uses_several_exposures(tiny_scene):
     with pytest.raises(ConfigError, match="at least two exposures"):
         Trainer(tiny_scene, _config(variant="multi-exposure"))

@@ -22,6 +22,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from benchlib.numbers import fmt
+from benchlib.plan import METHOD
 from benchlib.runner import python_command, run_measured
 from benchlib.tables import markdown_table
 from davis_io.session import Session
@@ -37,7 +38,7 @@ __all__ = [
     "run_blind_session",
 ]
 
-VARIANTS = ("full", "white-box", "oracle")
+VARIANTS = (METHOD, "white-box", "oracle")
 EXPOSURE_S = 0.15
 TIMEOUT_S = 3600.0
 
@@ -132,7 +133,7 @@ def _scores(metrics: dict) -> dict:
 
 def row_from_runs(key: str, session_dir: Path, timings: dict) -> BlindRow:
     """The row of a session from its runs' ``metrics.json``, calibration and truth."""
-    row = BlindRow(key, end_to_end_s=timings.get("full", math.nan))
+    row = BlindRow(key, end_to_end_s=timings.get(METHOD, math.nan))
     row.record_s = timings.get("record", math.nan)
     with Session.open(session_dir) as session:
         truth = session.truth()
@@ -206,7 +207,7 @@ def run_blind_session(
         metrics = session_dir / "fit" / f"blind-{variant}" / "metrics.json"
         if metrics.exists() and not fresh:
             continue
-        if variant == "full":
+        if variant == METHOD:
             budget = budget_s
         else:  # as long as full trained: the comparison is of the sensor values, not of time
             full = json.loads((session_dir / "fit" / "blind-full" / "metrics.json").read_text())
@@ -216,7 +217,7 @@ def run_blind_session(
         timings[variant] = usage.wall_s
         if usage.returncode != 0:
             log(f"{spec.key}: {variant} failed (exit {usage.returncode}), see {log_dir}")
-            if variant == "full":
+            if variant == METHOD:
                 break
     timings_path.parent.mkdir(parents=True, exist_ok=True)
     timings_path.write_text(json.dumps(timings, indent=1))
@@ -269,7 +270,7 @@ def _measured_cell(row: BlindRow) -> str:
 
 
 def _gap(row: BlindRow, variant: str, measure: str) -> str:
-    full, other = row.scores.get("full"), row.scores.get(variant)
+    full, other = row.scores.get(METHOD), row.scores.get(variant)
     return fmt(other[measure] - full[measure]) if full and other else "-"
 
 
@@ -286,7 +287,7 @@ def blind_rows_markdown(rows: list[BlindRow]) -> str:
     sensors = [[r.key, _sensor_cell(r), _measured_cell(r)] for r in rows]
     scores = []
     for r in rows:
-        full = r.scores.get("full")
+        full = r.scores.get(METHOD)
         scores.append(
             [
                 r.key,

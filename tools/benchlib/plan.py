@@ -14,8 +14,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from seenerf.model.config import DEFAULT_VARIANT
+
 __all__ = [
     "FULL_BUDGETS_S",
+    "METHOD",
     "QUICK_BUDGETS_S",
     "Ladder",
     "Plan",
@@ -23,10 +26,17 @@ __all__ = [
     "SCENE_SESSIONS",
     "SEED_REPEATS",
     "TABLE4_ROWS",
+    "UPPER_BOUND",
     "make_plan",
     "planned_rungs",
     "planned_training_s",
 ]
+
+METHOD = DEFAULT_VARIANT
+"""The variant the benchmark measures; every other variant is a reference beside it."""
+
+UPPER_BOUND = "oracle"
+"""The reference that bounds the method from above (trained on the truth)."""
 
 FULL_BUDGETS_S = (60.0, 180.0, 600.0)
 """Wall-clock budgets of the full benchmark: 1, 3 and 10 minutes (30 would add over an hour per
@@ -39,7 +49,7 @@ QUICK_BUDGETS_S = (20.0, 60.0)
 """Budgets of ``--quick``: enough to check the whole pipeline and the report, not to converge."""
 
 QUICK_VARIANTS = (
-    "full",
+    METHOD,
     "no-events",
     "base",
     "naive-events",
@@ -156,7 +166,7 @@ SCENE_SESSIONS = tuple(
 """The other ``make_benchmark.py`` scenes (their seeds are that tool's), each fitted with the
 table preset's ``full`` and ``oracle`` at the top budget: the trainer's targets per scene."""
 
-SCENE_VARIANTS = ("full", "oracle")
+SCENE_VARIANTS = (METHOD, UPPER_BOUND)
 
 SEED_REPEATS = (1, 2)
 """Seeds of two more runs of the table preset's ``full`` at the table budget: beside the default
@@ -220,14 +230,14 @@ def _grid(
     order = sorted(presets, key=lambda p: (p != table_preset, p == "paper"))
     for preset in order:
         for variant in variants:
-            if variant == "full":
+            if variant == METHOD:
                 rungs = (
                     budgets if preset != table_preset else tuple(sorted({*budgets, table_budget_s}))
                 )
                 ladders.append(Ladder(MAIN_SESSION.key, preset, variant, rungs))
             elif preset == table_preset:
                 rungs = (table_budget_s,)
-                if oracle_at_top and variant == "oracle" and budgets[-1] > table_budget_s:
+                if oracle_at_top and variant == UPPER_BOUND and budgets[-1] > table_budget_s:
                     rungs += (budgets[-1],)  # beside full at the top budget
                 ladders.append(Ladder(MAIN_SESSION.key, preset, variant, rungs))
     return ladders
@@ -297,7 +307,7 @@ def make_plan(
             oracle_at_top=False,
         )
         others = [
-            Ladder(MAIN_SESSION.key, p, "full", (budgets[0],))
+            Ladder(MAIN_SESSION.key, p, METHOD, (budgets[0],))
             for p in presets
             if p not in (table_preset, *QUICK_UNFITTED_PRESETS)
         ]
@@ -314,12 +324,12 @@ def make_plan(
     else:
         fitted = tuple(p for p in presets if p not in FULL_UNFITTED_PRESETS)
         ladders = _grid(fitted, variants, budgets, table_budget, table_preset, oracle_at_top=True)
-        if table_preset in fitted and "full" in variants:
+        if table_preset in fitted and METHOD in variants:
             ladders += [
-                Ladder(MAIN_SESSION.key, table_preset, "full", (table_budget,), seed=seed)
+                Ladder(MAIN_SESSION.key, table_preset, METHOD, (table_budget,), seed=seed)
                 for seed in SEED_REPEATS
             ]
-        if any(p != table_preset for p in fitted) and any(v != "full" for v in variants):
+        if any(p != table_preset for p in fitted) and any(v != METHOD for v in variants):
             notes.append(f"presets other than {table_preset} run only the full variant")
         notes += [
             f"the {p} preset is not fitted: {FULL_UNFITTED_PRESETS[p]}"
@@ -333,7 +343,7 @@ def make_plan(
         notes.append("Table 4 sessions not made" + (" in quick mode" if quick else ""))
     else:
         sessions += TABLE4_SESSIONS
-        ladders += [Ladder(s.key, table_preset, "full", (table_budget,)) for s in TABLE4_SESSIONS]
+        ladders += [Ladder(s.key, table_preset, METHOD, (table_budget,)) for s in TABLE4_SESSIONS]
     if scenes is None:
         scenes = not quick
     if not scenes:

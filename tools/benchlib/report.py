@@ -14,7 +14,7 @@ from benchlib.fits import SpeedProbe
 from benchlib.machine import Machine
 from benchlib.numbers import fmt
 from benchlib.paper import COMPARISONS
-from benchlib.plan import TABLE4_ROWS, Plan
+from benchlib.plan import METHOD, TABLE4_ROWS, Plan
 from benchlib.results import RunRow
 from benchlib.sessions import SessionOutcome
 from benchlib.tables import capture_table, comparison_lines, markdown_table, runs_table
@@ -75,7 +75,7 @@ def comparison_rows(report: BenchReport, axis: str, keys: list[str]) -> dict[str
     plan = report.plan
     if axis == "session":
         return {
-            k: _at(report.rows, TABLE4_ROWS[k], plan.table_preset, "full", plan.table_budget_s)
+            k: _at(report.rows, TABLE4_ROWS[k], plan.table_preset, METHOD, plan.table_budget_s)
             for k in keys
         }
     main = plan.sessions[0].key
@@ -89,7 +89,7 @@ def seed_scores(report: BenchReport) -> list[tuple[int, float]]:
         (r.seed, r.hdr_psnr)
         for r in report.rows
         if (r.session, r.preset, r.variant, r.budget_s)
-        == (plan.sessions[0].key, plan.table_preset, "full", plan.table_budget_s)
+        == (plan.sessions[0].key, plan.table_preset, METHOD, plan.table_budget_s)
         and r.ok
     )
 
@@ -129,8 +129,8 @@ def _check(name: str, value: float | None, target: str, met: bool | None) -> lis
 def target_checks(report: BenchReport) -> list[list[str]]:
     """The trainer's targets read from the runs: margins, absolute quality, speed, rendering."""
     main = report.plan.sessions[0].key
-    rows = comparison_rows(report, "variant", ["full", "base", "no-events", "oracle"])
-    full = rows["full"]
+    rows = comparison_rows(report, "variant", [METHOD, "base", "no-events", "oracle"])
+    full = rows[METHOD]
 
     def gap(a: RunRow | None, b: RunRow | None) -> float | None:
         return a.hdr_psnr - b.hdr_psnr if a and b and a.ok and b.ok else None
@@ -146,7 +146,7 @@ def target_checks(report: BenchReport) -> list[list[str]]:
                 None if value is None else value >= target,
             )
         )
-    fast = _at(report.rows, main, "fast", "full", 600.0)
+    fast = _at(report.rows, main, "fast", METHOD, 600.0)
     oracle = _at(report.rows, main, "fast", "oracle", 600.0)
     if fast and oracle and fast.budget_s == oracle.budget_s:
         rows["oracle"], full = oracle, fast  # the oracle beside full at the top budget
@@ -202,7 +202,7 @@ def scene_rows(report: BenchReport) -> list[list[str]]:
     outcomes = {s.spec.key: s for s in report.sessions}
     body = []
     for spec in plan.sessions:
-        full = _at(report.rows, spec.key, plan.table_preset, "full", top)
+        full = _at(report.rows, spec.key, plan.table_preset, METHOD, top)
         oracle = _at(report.rows, spec.key, plan.table_preset, "oracle", top)
         if full is None or full.budget_s != top:
             continue
