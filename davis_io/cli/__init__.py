@@ -73,12 +73,12 @@ def _failure(error: BaseException, verb: str, debug: bool) -> int:
         if error.exit_status is not None:
             return error.exit_status
         return EXIT_USAGE if isinstance(error, UsageError) else EXIT_ERROR
-    if isinstance(error, OSError) and error.errno == errno.ENOSPC:
-        print(f"seecap: error: {verb}: disk full ({error}): free some space", file=sys.stderr)
-        return EXIT_ERROR
     if isinstance(error, OSError) and error.filename is not None:
         reason = error.strerror or str(error)
         print(f"seecap: error: {verb}: {error.filename}: {reason}", file=sys.stderr)
+        return EXIT_ERROR
+    if isinstance(error, OSError) and error.errno == errno.ENOSPC:
+        print(f"seecap: error: {verb}: disk full ({error}): free some space", file=sys.stderr)
         return EXIT_ERROR
     print(
         f"seecap: error: {verb}: {type(error).__name__}: {error} (this is a bug: run again "

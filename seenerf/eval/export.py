@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-import errno
 import json
 import math
-import shutil
 from pathlib import Path
 
 import cv2
 import numpy as np
 import OpenEXR
+
+from seenerf.errors import not_written
 
 __all__ = [
     "tone_mapped_preview",
@@ -18,6 +18,8 @@ __all__ = [
     "write_json",
     "write_png",
 ]
+
+RENDER_AGAIN = "render the run again with `seecap render`"
 
 
 def write_exr(path: Path, image: np.ndarray, metadata: dict[str, str | float]) -> None:
@@ -30,7 +32,7 @@ def write_exr(path: Path, image: np.ndarray, metadata: dict[str, str | float]) -
         with OpenEXR.File(header, {name: pixels}) as exr:
             exr.write(str(path))
     except (OSError, RuntimeError) as error:  # OpenEXR reports a full disk as a RuntimeError
-        raise _not_written(path, str(error)) from error
+        raise not_written(path, str(error), RENDER_AGAIN) from error
 
 
 def write_png(path: Path, image: np.ndarray) -> None:
@@ -40,19 +42,7 @@ def write_png(path: Path, image: np.ndarray) -> None:
     if pixels.ndim == 3 and pixels.shape[-1] == 3:
         pixels = pixels[..., ::-1]
     if not cv2.imwrite(str(path), np.ascontiguousarray(pixels.squeeze())):
-        raise _not_written(path, "OpenCV could not write it")
-
-
-def _not_written(path: Path, why: str) -> OSError:
-    """The error for an image that was not written, with the free space of its disk."""
-    free_mb = shutil.disk_usage(path.parent).free / 1e6
-    full = free_mb < 1.0
-    return OSError(
-        errno.ENOSPC if full else errno.EIO,
-        f"not written ({why.splitlines()[0] if why else 'unknown'}; {free_mb:.0f} MB free on its "
-        "disk): free some space, then render the run again with `seecap render`",
-        str(path),
-    )
+        raise not_written(path, "OpenCV could not write it", RENDER_AGAIN)
 
 
 def tone_mapped_preview(hdr: np.ndarray) -> np.ndarray:
@@ -74,4 +64,7 @@ def write_json(path: Path, payload: dict) -> None:
         return value
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(clean(payload), indent=2) + "\n")
+    try:
+        path.write_text(json.dumps(clean(payload), indent=2) + "\n")
+    except OSError as error:
+        raise not_written(path, error.strerror or str(error)) from error

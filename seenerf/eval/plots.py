@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from seenerf.errors import not_written
+
 __all__ = ["crf_plot", "training_curves"]
 
 _CHANNELS = (("R", "tab:red"), ("G", "tab:green"), ("B", "tab:blue"))
@@ -23,8 +25,12 @@ def _figure(size=(6.4, 4.2)):
 def _save(pyplot, figure, path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.tight_layout()
-    figure.savefig(path)
-    pyplot.close(figure)
+    try:
+        figure.savefig(path)
+    except OSError as error:
+        raise not_written(path, error.strerror or str(error)) from error
+    finally:
+        pyplot.close(figure)
 
 
 def crf_plot(

@@ -15,6 +15,7 @@ from davis_io.session.lock import LOCK_NAME
 from seenerf.data.arrays import TrainingData
 from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
+from seenerf.errors import not_written
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
@@ -84,8 +85,11 @@ def _logged_to(path: Path, log: Callable[[str], None]) -> Callable[[str], None]:
     """``log`` that also appends each line, time-stamped, to ``path``."""
 
     def both(line: str) -> None:
-        with open(path, "a", encoding="utf-8") as file:
-            file.write(f"{time.strftime('%Y-%m-%d %H:%M:%S')}  {line}\n")
+        try:
+            with open(path, "a", encoding="utf-8") as file:
+                file.write(f"{time.strftime('%Y-%m-%d %H:%M:%S')}  {line}\n")
+        except OSError as error:
+            raise not_written(path, error.strerror or str(error)) from error
         log(line)
 
     return both

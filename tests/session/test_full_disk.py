@@ -93,3 +93,44 @@ def test_a_real_small_disk_through_the_recorder(tmp_path):
             assert session.event_count == session.manifest.event_count
     finally:
         subprocess.run(["umount", str(mount)], check=False)
+
+
+FIT_ON_SMALL_DISK = Path(__file__).parents[1] / "seenerf" / "fit_on_small_disk.py"
+
+
+def _fit_into(folder: Path) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, str(FIT_ON_SMALL_DISK), str(folder)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+
+
+def test_a_real_small_disk_under_a_fit(tmp_path):
+    """A fit whose disk fills after its checkpoint, in its plots and renders: one line, exit 1."""
+    alone = _fit_into(tmp_path / "roomy")
+    assert alone.returncode == 0, alone.stderr
+    checkpoint = (tmp_path / "roomy" / "fit" / "fast-full" / "checkpoint.pt").stat().st_size
+    small = tmp_path / "small"
+    (small / "fit").mkdir(parents=True)
+    size_kb = checkpoint // 1024 + 24  # the checkpoint, the log and config, not the figures
+    mounted = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={size_kb}k", "tmpfs", str(small / "fit")],
+        capture_output=True,
+        check=False,
+    )
+    if mounted.returncode != 0:
+        pytest.skip("no tmpfs can be mounted here (needs root); the injected tests cover it")
+    try:
+        done = _fit_into(small)
+        kept = (small / "fit" / "fast-full" / "checkpoint.pt").stat().st_size
+    finally:
+        subprocess.run(["umount", str(small / "fit")], check=False)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 1 and len(lines) == 1, done.stderr
+    assert "Traceback" not in done.stderr
+    assert "not written" in lines[0] and "MB free" in lines[0]
+    assert "run the command again" in lines[0]
+    assert kept == checkpoint  # the trained steps are kept: running again resumes and renders
