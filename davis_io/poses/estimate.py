@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import errno
 import json
+import shutil
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -18,6 +20,7 @@ from davis_io.poses.latent import calibrated_response, latent_images, sharpness
 from davis_io.poses.nerfstudio import latent_frame_name
 from davis_io.poses.recovery import reconstruct_with_recovery
 from davis_io.session import DEFAULT_BINS, Session, SessionPoses, writer_lock
+from davis_io.session.writer import MIN_FREE_BYTES
 
 __all__ = [
     "PoseReport",
@@ -27,6 +30,11 @@ __all__ = [
 
 Progress = Callable[[str, int, int], None]
 """``progress(stage, done, total)``; ``total`` is 0 when unknown."""
+
+COLMAP_BYTES_PER_PIXEL = 8
+"""Disk a latent frame takes in ``colmap/``, per pixel, with room to spare: measured 0.65 MB per
+346 x 260 frame (its PNG 0.19 MB, its features and matches in the database 0.39 MB, its share of
+the sparse models 0.07 MB), 7.2 bytes per pixel."""
 
 
 @dataclass(frozen=True)
@@ -97,6 +105,24 @@ class PoseReport:
         return cls(**data)
 
 
+def _check_room(folder: Path, latent_frames: int, height: int, width: int) -> None:
+    """Refuse to start when the disk cannot hold the latent frames and COLMAP's database.
+
+    COLMAP's database aborts the process when SQLite cannot write, so a full disk must be
+    caught before it starts, not where it happens.
+    """
+    needed = latent_frames * height * width * COLMAP_BYTES_PER_PIXEL + MIN_FREE_BYTES
+    free = shutil.disk_usage(folder).free
+    if free < needed:
+        raise OSError(
+            errno.ENOSPC,
+            f"poses need about {needed / 1e6:.0f} MB for {latent_frames} latent frames and "
+            f"COLMAP's database, and {free / 1e6:.0f} MB is free: free some space, then run "
+            "the poses again",
+            str(folder),
+        )
+
+
 def _write_latent_frames(session, bins, response, image_dir, progress):
     image_dir.mkdir(parents=True, exist_ok=True)
     names, scores = [], []
@@ -112,7 +138,14 @@ def _write_latent_frames(session, bins, response, image_dir, progress):
         view = [latent_frame_name(i, k) for k in range(len(images))]
         for name, image in zip(view, images, strict=True):
             bgr = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
-            cv2.imwrite(str(image_dir / name), bgr)
+            if not cv2.imwrite(str(image_dir / name), bgr):
+                free_mb = shutil.disk_usage(image_dir).free / 1e6
+                raise OSError(
+                    errno.EIO,
+                    f"latent frame not written ({free_mb:.0f} MB free on its disk): free some "
+                    "space, then run the poses again",
+                    str(image_dir / name),
+                )
         names.append(view)
         scores.append([sharpness(image) for image in images])
         progress("latent frames", i + 1, session.frame_count)
@@ -239,6 +272,7 @@ def _estimate(session, b, intrinsics, force, progress, threshold) -> PoseReport:
     if threshold is not None:
         calibration = calibration.with_threshold(threshold)
     bins = session.contrast_bins(b, calibration)
+    _check_room(session.folder, bins.calibrated.shape[0] * (b + 1), session.height, session.width)
     names, scores = _write_latent_frames(
         session, bins, calibrated_response(calibration), work_dir / "images", progress
     )
