@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import enum
 import shutil
+import signal
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,6 +41,12 @@ __all__ = [
 
 DATABASE_NAME = "database.db"
 SEED = 0
+
+if threading.current_thread() is threading.main_thread():
+    # pycolmap installs glog's failure handler for SIGTERM when imported: a plain `kill` then
+    # printed the native stack of a process that did nothing wrong. SIGTERM ends the process
+    # quietly again (exit 143); the verbs that save work on SIGTERM install their own handler.
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 class ColmapError(DavisIOError):

@@ -1,3 +1,6 @@
+import subprocess
+import sys
+
 import cv2
 import numpy as np
 import pytest
@@ -50,3 +53,17 @@ def test_textureless_views_give_a_colmap_error_with_advice(tmp_path):
     with pytest.raises(ColmapError, match="texture") as error:
         reconstruct_with_recovery(tmp_path / "colmap", tmp_path / "images", names, [[1.0]] * 4)
     assert "exhaustive, guided, relaxed-initialisation, sharpest-per-view" in str(error.value)
+
+
+def test_sigterm_ends_a_process_that_imported_pycolmap_without_a_native_stack_dump():
+    kill_self = (
+        "import os, signal, time\n"
+        "import davis_io.poses.colmap\n"
+        "os.kill(os.getpid(), signal.SIGTERM)\n"
+        "time.sleep(5)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", kill_self], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == -15  # ended by the signal, as without pycolmap
+    assert "stack trace" not in done.stderr and "Aborted" not in done.stderr
