@@ -10,7 +10,9 @@ import argparse
 import errno
 import importlib
 import os
+import signal
 import sys
+import threading
 import warnings
 
 from davis_io import SeecapError, __version__
@@ -39,6 +41,15 @@ EXIT_OK = 0
 EXIT_ERROR = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 128 + signal.SIGTERM
+
+
+class _Terminated(BaseException):
+    """SIGTERM arrived (``kill``, a scheduler's stop): unwound like Ctrl-C, closing every file."""
+
+
+def _raise_terminated(signum: int, frame) -> None:
+    raise _Terminated
 
 
 def _build_parser() -> tuple[argparse.ArgumentParser, dict[str, object]]:
@@ -89,10 +100,12 @@ def _failure(error: BaseException, verb: str, debug: bool) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run ``seecap``; return the exit code (0 ok, 1 failure, 2 usage error, 130 Ctrl-C).
+    """Run ``seecap``; return the exit code (0 ok, 1 failure, 2 usage, 130 Ctrl-C, 143 SIGTERM).
 
-    Every failure is one line ``seecap: error: VERB: what, where and what to do`` and warnings
-    are ``seecap: warning: ...`` lines; ``--debug`` shows tracebacks instead.
+    SIGTERM unwinds like Ctrl-C (``record`` and ``fit`` handle both themselves, to close the
+    session or save a checkpoint). Every failure is one line ``seecap: error: VERB: what, where
+    and what to do`` and warnings are ``seecap: warning: ...`` lines; ``--debug`` shows
+    tracebacks instead.
     """
     parser, modules = _build_parser()
     args = parser.parse_args(argv)
@@ -102,6 +115,8 @@ def main(argv: list[str] | None = None) -> int:
     shown = warnings.showwarning
     if not args.debug:
         warnings.showwarning = _show_warning
+    in_main = threading.current_thread() is threading.main_thread()
+    terminate = signal.signal(signal.SIGTERM, _raise_terminated) if in_main else None
     try:
         status = int(modules[args.verb].run(args) or EXIT_OK)
         sys.stdout.flush()  # a reader that has gone shows here, not at the interpreter's exit
@@ -109,6 +124,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("seecap: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except _Terminated:
+        print(f"seecap: {args.verb}: terminated (SIGTERM)", file=sys.stderr)
+        return EXIT_TERMINATED
     except BrokenPipeError:  # the reader (``| head``) has gone: stop quietly
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
@@ -116,6 +134,8 @@ def main(argv: list[str] | None = None) -> int:
         return _failure(error, args.verb, args.debug)
     finally:
         warnings.showwarning = shown
+        if terminate is not None:
+            signal.signal(signal.SIGTERM, terminate)
 
 
 if __name__ == "__main__":

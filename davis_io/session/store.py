@@ -419,8 +419,10 @@ class Session(Closing):
                     )
                     with storage_errors(self.h5_path):
                         write_bins_row(group, exposure)
-            except OSError as error:
+            except BaseException as error:  # a full disk, Ctrl-C, SIGTERM
                 del h5[bins_path(b)]  # never listed as stored when partial
+                if not isinstance(error, OSError):
+                    raise
                 raise SessionError(
                     f"{self.h5_path}: bins for b={b} not stored: {error.strerror or error}"
                 ) from error
@@ -453,7 +455,8 @@ class _WritableSession:
 
     A file open for writing that is never closed stays flagged as open, and HDF5 then refuses
     to read it; so while it is open, SIGTERM (``kill``, a scheduler's stop) ends the process
-    through the normal exit path, which closes the file, as Ctrl-C already does.
+    through the normal exit path, which closes the file, as Ctrl-C already does (unless the
+    program handles SIGTERM itself, as the ``seecap`` verbs do).
     """
 
     def __init__(self, session: Session):
@@ -461,7 +464,8 @@ class _WritableSession:
         self._previous_handler = None
 
     def __enter__(self) -> h5py.File:
-        if threading.current_thread() is threading.main_thread():
+        in_main = threading.current_thread() is threading.main_thread()
+        if in_main and signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
             self._previous_handler = signal.signal(signal.SIGTERM, _exit_on_terminate)
         self._session._h5.close()
         try:

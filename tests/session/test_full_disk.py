@@ -134,3 +134,29 @@ def test_a_real_small_disk_under_a_fit(tmp_path):
     assert "not written" in lines[0] and "MB free" in lines[0]
     assert "run the command again" in lines[0]
     assert kept == checkpoint  # the trained steps are kept: running again resumes and renders
+
+
+def test_sigterm_while_adding_bins_is_one_line_and_stores_nothing_partial(
+    tmp_path, monkeypatch, capsys
+):
+    import os
+    import signal
+
+    folder = tmp_path / "s"
+    record(ListSource(itertools.islice(endless_packets(True), 40)), folder)  # 20 frames
+    checks = []
+
+    def terminated_at_the_fifth_frame(path):
+        checks.append(path)
+        if len(checks) == 5:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return shutil.disk_usage(path)
+
+    monkeypatch.setattr(writer_module.shutil, "disk_usage", terminated_at_the_fifth_frame)
+    assert main(["bins", str(folder), "--bins", "6"]) == 143
+    assert capsys.readouterr().err.strip() == "seecap: bins: terminated (SIGTERM)"
+    assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL  # put back
+    monkeypatch.undo()
+    with Session.open(folder) as session:
+        assert 6 not in session.stored_bins() and session.has_bins(4)
+        assert session.manifest.status == "complete"
