@@ -20,7 +20,7 @@ from davis_io.poses.latent import calibrated_response, latent_images, sharpness
 from davis_io.poses.nerfstudio import latent_frame_name
 from davis_io.poses.recovery import reconstruct_with_recovery
 from davis_io.session import DEFAULT_BINS, Session, SessionPoses, writer_lock
-from davis_io.session.writer import MIN_FREE_BYTES
+from davis_io.session.writer import check_free_space
 
 __all__ = [
     "PoseReport",
@@ -111,16 +111,8 @@ def _check_room(folder: Path, latent_frames: int, height: int, width: int) -> No
     COLMAP's database aborts the process when SQLite cannot write, so a full disk must be
     caught before it starts, not where it happens.
     """
-    needed = latent_frames * height * width * COLMAP_BYTES_PER_PIXEL + MIN_FREE_BYTES
-    free = shutil.disk_usage(folder).free
-    if free < needed:
-        raise OSError(
-            errno.ENOSPC,
-            f"poses need about {needed / 1e6:.0f} MB for {latent_frames} latent frames and "
-            f"COLMAP's database, and {free / 1e6:.0f} MB is free: free some space, then run "
-            "the poses again",
-            str(folder),
-        )
+    what = f"estimating poses ({latent_frames} latent frames and COLMAP's database)"
+    check_free_space(folder, what, latent_frames * height * width * COLMAP_BYTES_PER_PIXEL)
 
 
 def _write_latent_frames(session, bins, response, image_dir, progress):

@@ -56,20 +56,23 @@ def storage_errors(path: Path) -> Iterator[None]:
         raise OSError(number, os.strerror(number), str(path)) from error
 
 
-def check_free_space(folder: Path, what: str) -> None:
-    """Raise ``OSError(ENOSPC)`` when less than :data:`MIN_FREE_BYTES` is free for ``folder``.
+def check_free_space(folder: Path, what: str, files_bytes: int = 0) -> None:
+    """Raise ``OSError(ENOSPC)`` unless ``files_bytes`` and :data:`MIN_FREE_BYTES` are free.
 
     Args:
         folder: a folder on the disk to check.
         what: what would be written, for the message.
+        files_bytes: what it is about to write, when known in advance.
     """
-    free = shutil.disk_usage(folder).free
-    if free < MIN_FREE_BYTES:
+    free, needed = shutil.disk_usage(folder).free, MIN_FREE_BYTES + files_bytes
+    if free < needed:
+        files = f"{files_bytes / 1e6:.0f} MB for its files and " if files_bytes else ""
         raise OSError(
             errno.ENOSPC,
-            f"{free / 1e6:.1f} MB free on the disk holding {folder}, and {what} keeps "
-            f"{MIN_FREE_BYTES / 1e6:.0f} MB free to close its files intact: free some space or "
-            "write to another disk",
+            f"{free / 1e6:.1f} MB free on the disk holding {folder}, and {what} needs "
+            f"{needed / 1e6:.0f} MB ({files}{MIN_FREE_BYTES / 1e6:.0f} MB to close them intact): "
+            "free some space or write to another disk",
+            str(folder),
         )
 
 

@@ -112,19 +112,18 @@ def test_read_intrinsics(tmp_path):
 def test_a_disk_too_small_for_colmap_is_refused_before_it_starts(
     textureless_session, monkeypatch, capsys
 ):
-    import shutil
     from collections import namedtuple
 
-    import davis_io.poses.estimate as estimate
+    import davis_io.session.writer as writer
 
     usage = namedtuple("usage", "total used free")
     # 6 frames x 5 latent frames of 64 x 48 pixels x 8 bytes (0.74 MB), plus the 16.78 MB kept
     # free: 17.5 MB.
-    monkeypatch.setattr(estimate.shutil, "disk_usage", lambda path: usage(0, 0, 10_000_000))
+    monkeypatch.setattr(writer.shutil, "disk_usage", lambda path: usage(0, 0, 10_000_000))
     assert main(["poses", str(textureless_session)]) == 1
     err = capsys.readouterr().err
     last = err.strip().splitlines()[-1]
     assert "Traceback" not in err and last.startswith("seecap: error: poses: ")
-    assert "poses need about 18 MB for 30 latent frames" in last and "10 MB is free" in last
+    assert "10.0 MB free" in last and "estimating poses (30 latent frames" in last
+    assert "needs 18 MB (1 MB for its files and 17 MB to close them intact)" in last
     assert not (textureless_session / "colmap" / "images").exists()
-    monkeypatch.setattr(estimate.shutil, "disk_usage", shutil.disk_usage)
