@@ -369,13 +369,12 @@ class Session(Closing):
             if path in h5:
                 del h5[path]
             group = h5.create_group(path)
-            group["c2w"] = np.asarray(poses.c2w, np.float64)
-            group["registered"] = np.asarray(poses.registered, np.bool_)
-            group["intrinsics"] = np.asarray(poses.intrinsics, np.float64)
-            group["intrinsics"].attrs["distortion"] = np.asarray(poses.distortion, np.float64)
-            group["bounds"] = np.asarray(poses.bounds, np.float64)
-            if poses.time_us is not None:
-                group["time_us"] = np.asarray(poses.time_us, np.int64)
+            try:
+                with storage_errors(self.h5_path):
+                    _write_pose_datasets(group, poses)
+            except BaseException:  # a full disk, Ctrl-C, SIGTERM
+                del h5[path]  # never listed as stored when partial
+                raise
 
     def calibration(self) -> SensorCalibration | None:
         """The sensor calibration measured from this recording, or None before it is.
@@ -444,6 +443,16 @@ class Session(Closing):
         """Reopen the HDF5 file for writing for the duration of a ``with`` block."""
         self.require_writable()
         return _WritableSession(self)
+
+
+def _write_pose_datasets(group: h5py.Group, poses: SessionPoses) -> None:
+    group["c2w"] = np.asarray(poses.c2w, np.float64)
+    group["registered"] = np.asarray(poses.registered, np.bool_)
+    group["intrinsics"] = np.asarray(poses.intrinsics, np.float64)
+    group["intrinsics"].attrs["distortion"] = np.asarray(poses.distortion, np.float64)
+    group["bounds"] = np.asarray(poses.bounds, np.float64)
+    if poses.time_us is not None:
+        group["time_us"] = np.asarray(poses.time_us, np.int64)
 
 
 def _exit_on_terminate(signum: int, frame) -> None:

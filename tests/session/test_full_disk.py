@@ -160,3 +160,32 @@ def test_sigterm_while_adding_bins_is_one_line_and_stores_nothing_partial(
     with Session.open(folder) as session:
         assert 6 not in session.stored_bins() and session.has_bins(4)
         assert session.manifest.status == "complete"
+
+
+def test_poses_a_full_disk_cut_short_are_not_listed_as_stored(tmp_path, monkeypatch):
+    import errno
+
+    import numpy as np
+
+    import davis_io.session.store as store
+    from davis_io.session import SessionPoses
+
+    folder = tmp_path / "s"
+    record(ListSource(itertools.islice(endless_packets(True), 40)), folder)  # 20 frames
+
+    def full_after_the_first_dataset(group, poses):
+        group["c2w"] = poses.c2w
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(store, "_write_pose_datasets", full_after_the_first_dataset)
+    poses = SessionPoses(
+        c2w=np.tile(np.eye(4), (20, 5, 1, 1)),
+        registered=np.ones((20, 5), bool),
+        intrinsics=np.array([100.0, 100.0, 32.0, 24.0]),
+        distortion=np.zeros(0),
+        bounds=np.array([0.5, 4.0]),
+    )
+    with Session.open(folder) as session, pytest.raises(OSError, match="No space"):
+        session.write_poses(4, poses)
+    with Session.open(folder) as session:
+        assert session.poses(4) is None
