@@ -71,7 +71,7 @@ class FitConfig:
     anchor_weight: float = 0.5
     anchor_log_exposure: float = 0.0
     anchor_value: float = 0.5
-    response: str = "learned"
+    response: str = "auto"
     threshold: float = 0.0
     cutoff_hz: float = 150.0
     event_share: float = 0.5

@@ -55,16 +55,14 @@ def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked(
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
     scene.linear_levels = (0.02, 0.9)
-    auto = {"response": "auto"}
-    model, _ = build_model(scene, _config(**auto), "cpu")
+    model, _ = build_model(scene, _config(), "cpu")  # response "auto" by default
     assert isinstance(model.crf, LinearCrf) and model.crf.black == 0.02
     assert isinstance(build_model(scene, _config(response="learned"), "cpu")[0].crf, RgbCrf)
-    power = build_model(scene, _config(variant="power-crf", **auto), "cpu")[0]
-    assert isinstance(power.crf, PowerCrf)
-    trainer = Trainer(scene, _config(**auto), log=lambda line: None)
+    assert isinstance(build_model(scene, _config(variant="power-crf"), "cpu")[0].crf, PowerCrf)
+    trainer = Trainer(scene, _config(), log=lambda line: None)
     assert trainer.train().skipped_steps == 0
     scene.linear_levels = None
-    assert isinstance(build_model(scene, _config(**auto), "cpu")[0].crf, RgbCrf)
+    assert isinstance(build_model(scene, _config(), "cpu")[0].crf, RgbCrf)
 
 
 def test_multi_exposure_needs_and_uses_several_exposures(tiny_scene):
