@@ -144,7 +144,7 @@ def test_sigterm_while_adding_bins_is_one_line_and_stores_nothing_partial(
 
     folder = tmp_path / "s"
     record(ListSource(itertools.islice(endless_packets(True), 40)), folder)  # 20 frames
-    checks = []
+    checks, before = [], signal.getsignal(signal.SIGTERM)
 
     def terminated_at_the_fifth_frame(path):
         checks.append(path)
@@ -155,7 +155,7 @@ def test_sigterm_while_adding_bins_is_one_line_and_stores_nothing_partial(
     monkeypatch.setattr(writer_module.shutil, "disk_usage", terminated_at_the_fifth_frame)
     assert main(["bins", str(folder), "--bins", "6"]) == 143
     assert capsys.readouterr().err.strip() == "seecap: bins: terminated (SIGTERM)"
-    assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL  # put back
+    assert signal.getsignal(signal.SIGTERM) == before  # put back
     monkeypatch.undo()
     with Session.open(folder) as session:
         assert 6 not in session.stored_bins() and session.has_bins(4)
