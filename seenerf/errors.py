@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-import errno
-import shutil
 from collections.abc import Mapping
-from pathlib import Path
 from typing import TypeVar
 
 from davis_io import SeecapError
@@ -17,7 +14,6 @@ __all__ = [
     "TrainingDataError",
     "TrainingStopped",
     "by_name",
-    "not_written",
 ]
 
 T = TypeVar("T")
@@ -51,25 +47,6 @@ class TrainingStopped(SeeNerfError):
     def __init__(self, message: str, signal_number: int):
         super().__init__(message)
         self.exit_status = 128 + signal_number
-
-
-def not_written(
-    path: Path,
-    why: str,
-    then: str = "run the command again (a fit resumes from its checkpoint)",
-) -> OSError:
-    """The error for an output that was not written: the file, why, its disk's free space.
-
-    ``errno`` is ENOSPC when under 1 MB is free, else EIO; the message ends with ``then``.
-    """
-    path = Path(path)
-    free_mb = shutil.disk_usage(path.parent).free / 1e6
-    return OSError(
-        errno.ENOSPC if free_mb < 1.0 else errno.EIO,
-        f"not written ({why.splitlines()[0] if why else 'unknown'}; {free_mb:.0f} MB free on its "
-        f"disk): free some space, then {then}",
-        str(path),
-    )
 
 
 def by_name(table: Mapping[str, T], what: str, name: str) -> T:

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import errno
 import json
-import shutil
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -20,7 +18,7 @@ from davis_io.poses.latent import calibrated_response, latent_images, sharpness
 from davis_io.poses.nerfstudio import latent_frame_name
 from davis_io.poses.recovery import reconstruct_with_recovery
 from davis_io.session import DEFAULT_BINS, Session, SessionPoses, writer_lock
-from davis_io.session.writer import check_free_space
+from davis_io.session.writer import check_free_space, not_written
 
 __all__ = [
     "PoseReport",
@@ -131,12 +129,8 @@ def _write_latent_frames(session, bins, response, image_dir, progress):
         for name, image in zip(view, images, strict=True):
             bgr = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
             if not cv2.imwrite(str(image_dir / name), bgr):
-                free_mb = shutil.disk_usage(image_dir).free / 1e6
-                raise OSError(
-                    errno.EIO,
-                    f"latent frame not written ({free_mb:.0f} MB free on its disk): free some "
-                    "space, then run the poses again",
-                    str(image_dir / name),
+                raise not_written(
+                    image_dir / name, "OpenCV could not write it", "run the poses again"
                 )
         names.append(view)
         scores.append([sharpness(image) for image in images])

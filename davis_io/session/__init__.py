@@ -14,6 +14,7 @@ from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.store import Session
 from davis_io.session.truth import TRUTH_DIR, Truth, load_truth, save_truth
 from davis_io.session.units import parse_duration_us, seconds_argument
+from davis_io.session.writer import not_written, output_errors
 from davis_io.types import ColorFilter
 
 __all__ = [
@@ -33,6 +34,8 @@ __all__ = [
     "default_calibration",
     "filter_weights",
     "load_truth",
+    "not_written",
+    "output_errors",
     "parse_duration_us",
     "read_manifest",
     "save_truth",

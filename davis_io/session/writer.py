@@ -26,7 +26,14 @@ from davis_io.session.layout import (
 )
 from davis_io.types import Frame
 
-__all__ = ["MIN_FREE_BYTES", "SessionWriter", "check_free_space", "storage_errors"]
+__all__ = [
+    "MIN_FREE_BYTES",
+    "SessionWriter",
+    "check_free_space",
+    "not_written",
+    "output_errors",
+    "storage_errors",
+]
 
 _DEFAULT_IMAGE_DTYPE = np.uint16
 _DEFAULT_BIT_DEPTH = 10
@@ -54,6 +61,32 @@ def storage_errors(path: Path) -> Iterator[None]:
         found = _ERRNO.search(str(error))
         number = int(found.group(1)) if found else errno.EIO
         raise OSError(number, os.strerror(number), str(path)) from error
+
+
+def not_written(path: Path, why: str, then: str = "run the command again") -> OSError:
+    """The error for an output that was not written: the file, why, its disk's free space.
+
+    ``errno`` is ENOSPC when under 1 MB is free, else EIO; the message ends with ``then``.
+    """
+    path = Path(path)
+    free_mb = shutil.disk_usage(path.parent).free / 1e6
+    return OSError(
+        errno.ENOSPC if free_mb < 1.0 else errno.EIO,
+        f"not written ({why.splitlines()[0] if why else 'unknown'}; {free_mb:.0f} MB free on its "
+        f"disk): free some space, then {then}",
+        str(path),
+    )
+
+
+@contextmanager
+def output_errors(
+    path: Path, then: str = "run the command again", kinds: tuple[type, ...] = (OSError,)
+) -> Iterator[None]:
+    """Turn a failure (of ``kinds``) to write ``path`` into :func:`not_written`'s error."""
+    try:
+        yield
+    except kinds as error:
+        raise not_written(path, getattr(error, "strerror", None) or str(error), then) from error
 
 
 def check_free_space(folder: Path, what: str, files_bytes: int = 0) -> None:

@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import OpenEXR
 
-from seenerf.errors import not_written
+from davis_io.session import not_written, output_errors
 
 __all__ = [
     "tone_mapped_preview",
@@ -28,11 +28,10 @@ def write_exr(path: Path, image: np.ndarray, metadata: dict[str, str | float]) -
     name = "RGB" if image.shape[-1] == 3 else "Y"
     pixels = np.ascontiguousarray(image if name == "RGB" else image[..., 0], np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **metadata}
-    try:
+    # OpenEXR reports a full disk as a RuntimeError
+    with output_errors(path, RENDER_AGAIN, (OSError, RuntimeError)):
         with OpenEXR.File(header, {name: pixels}) as exr:
             exr.write(str(path))
-    except (OSError, RuntimeError) as error:  # OpenEXR reports a full disk as a RuntimeError
-        raise not_written(path, str(error), RENDER_AGAIN) from error
 
 
 def write_png(path: Path, image: np.ndarray) -> None:
@@ -64,7 +63,5 @@ def write_json(path: Path, payload: dict) -> None:
         return value
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    try:
+    with output_errors(path):
         path.write_text(json.dumps(clean(payload), indent=2) + "\n")
-    except OSError as error:
-        raise not_written(path, error.strerror or str(error)) from error

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from seenerf.errors import not_written
+from davis_io.session import output_errors
 
 __all__ = ["crf_plot", "training_curves"]
 
@@ -26,9 +26,8 @@ def _save(pyplot, figure, path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.tight_layout()
     try:
-        figure.savefig(path)
-    except OSError as error:
-        raise not_written(path, error.strerror or str(error)) from error
+        with output_errors(path):
+            figure.savefig(path)
     finally:
         pyplot.close(figure)
 

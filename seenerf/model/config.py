@@ -7,7 +7,8 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from seenerf.errors import ConfigError, not_written
+from davis_io.session import output_errors
+from seenerf.errors import ConfigError
 from seenerf.model.presets import DEFAULT_PRESET, PRESETS
 
 __all__ = ["DEFAULT_VARIANT", "FitConfig", "load_config", "save_config"]
@@ -143,10 +144,8 @@ class FitConfig:
 def save_config(config: FitConfig, path: Path, extra: dict | None = None) -> None:
     """Write the config (and resolved extras such as the field size) as JSON."""
     payload = {"config": dataclasses.asdict(config), **(extra or {})}
-    try:
+    with output_errors(path):
         path.write_text(json.dumps(payload, indent=2, default=str) + "\n")
-    except OSError as error:
-        raise not_written(path, error.strerror or str(error)) from error
 
 
 def load_config(path: Path) -> FitConfig:

@@ -10,12 +10,11 @@ from pathlib import Path
 
 import torch
 
-from davis_io.session import DEFAULT_BINS, Session, writer_lock
+from davis_io.session import DEFAULT_BINS, Session, output_errors, writer_lock
 from davis_io.session.lock import LOCK_NAME
 from seenerf.data.arrays import TrainingData
 from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
-from seenerf.errors import not_written
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
@@ -85,11 +84,8 @@ def _logged_to(path: Path, log: Callable[[str], None]) -> Callable[[str], None]:
     """``log`` that also appends each line, time-stamped, to ``path``."""
 
     def both(line: str) -> None:
-        try:
-            with open(path, "a", encoding="utf-8") as file:
-                file.write(f"{time.strftime('%Y-%m-%d %H:%M:%S')}  {line}\n")
-        except OSError as error:
-            raise not_written(path, error.strerror or str(error)) from error
+        with output_errors(path), open(path, "a", encoding="utf-8") as file:
+            file.write(f"{time.strftime('%Y-%m-%d %H:%M:%S')}  {line}\n")
         log(line)
 
     return both
@@ -106,7 +102,7 @@ def resolved_settings(trainer: Trainer) -> dict:
         "space": "ndc" if renderer.space is not None else "world",
         "event_threshold": trainer.data.threshold,
         "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.cutoff_hz,
-        "rgb_response": type(trainer.model.crf).__name__ if trainer.model.crf else None,
+        "rgb_response": None if trainer.model.crf is None else type(trainer.model.crf).__name__,
     }
 
 
