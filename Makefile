@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 TORCH_PIN ?= torch==2.13.0
 DEMO_DIR ?= demo-session
 
-.PHONY: install demo test bench bench-quick bench-blind lint clean
+.PHONY: install demo test bench bench-quick bench-blind bench-cluster lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -32,13 +32,20 @@ test: $(STAMP)
 bench-quick: $(STAMP)
 	$(BIN)/python tools/bench.py --quick
 
+# RAY=local (or a cluster's address) runs every rung and blind session as a Ray task.
+RAY_OPTION = $(if $(RAY),--ray $(RAY))
+
 bench: $(STAMP)
-	$(BIN)/python tools/bench.py --publish
-	$(BIN)/python tools/bench_blind.py --jobs 2 --publish
+	$(BIN)/python tools/bench.py --publish $(RAY_OPTION)
+	$(BIN)/python tools/bench_blind.py --jobs 2 --publish $(RAY_OPTION)
 
 # The blind-camera benchmark alone: six randomly drawn sensors, each fitted from its recording.
 bench-blind: $(STAMP)
-	$(BIN)/python tools/bench_blind.py --jobs 2 --publish
+	$(BIN)/python tools/bench_blind.py --jobs 2 --publish $(RAY_OPTION)
+
+# The quick plan locally, then on a local Ray instance: wall times and scores side by side.
+bench-cluster: $(STAMP)
+	$(BIN)/python tools/bench_cluster.py --publish
 
 lint: $(STAMP)
 	$(BIN)/pip install -q ruff

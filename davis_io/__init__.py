@@ -3,8 +3,8 @@
 This package never imports torch.
 """
 
-from davis_io.errors import SeecapError
+from davis_io.errors import SeecapError, describe_error
 
 __version__ = "0.1.0"
 
-__all__ = ["SeecapError", "__version__"]
+__all__ = ["SeecapError", "__version__", "describe_error"]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import errno
+
 __all__ = [
     "DavisIOError",
     "DeviceError",
@@ -9,6 +11,7 @@ __all__ = [
     "SeecapError",
     "SessionError",
     "UsageError",
+    "describe_error",
 ]
 
 
@@ -56,3 +59,21 @@ class DeviceError(DavisIOError):
 
 class SessionError(DavisIOError):
     """A session folder is missing, incomplete or inconsistent."""
+
+
+def describe_error(error: BaseException) -> str:
+    """One line for any failure: what was wrong, where, and what to do.
+
+    A seecap error is its own message; a file that could not be read or written is named with
+    the reason; anything else is a bug, and the line says how to report it.
+    """
+    if isinstance(error, SeecapError):
+        return str(error)
+    if isinstance(error, OSError) and error.filename is not None:
+        return f"{error.filename}: {error.strerror or error}"
+    if isinstance(error, OSError) and error.errno == errno.ENOSPC:
+        return f"disk full ({error}): free some space"
+    return (
+        f"{type(error).__name__}: {error} (this is a bug: run again with `seecap --debug ...` "
+        "for the traceback and report it)"
+    )

@@ -12,7 +12,7 @@ APP_LAYER = "seenerf.cli"
 APP_LAYER_ALLOWED = ("davis_io.prepare",)
 """The verbs are the application above both packages: ``seecap fit`` prepares a session (its
 calibration and poses, davis_io's stages) before it fits it."""
-ROOT_NAMES_ALLOWED = {"SeecapError"}
+ROOT_NAMES_ALLOWED = {"SeecapError", "describe_error"}
 VERB_TABLE = ROOT / "davis_io" / "cli" / "__init__.py"
 
 

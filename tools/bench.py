@@ -5,7 +5,7 @@ One command regenerates every number of the report:
     python tools/bench.py [--quick] [--out bench-out] [--poses auto|estimated|truth]
                           [--presets fast ...] [--variants full ...] [--budgets 60 180 ...]
                           [--table-budget S] [--table4 | --no-table4] [--scenes | --no-scenes]
-                          [--no-capture] [--fresh] [--publish]
+                          [--no-capture] [--fresh] [--ray ADDRESS] [--publish]
 
 1. Sessions: the ``room`` benchmark of ``make_benchmark.py``, the Table 4 sessions (input
    exposure x1/16, x1, x16 of 0.016 s at a fixed gain; DVS noise x1, x2, x4) and the other four
@@ -104,6 +104,12 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
         help="train every rung again instead of reading back earlier ones",
     )
     parser.add_argument(
+        "--ray",
+        metavar="local|auto|ADDRESS",
+        help="train every rung as a Ray task, the ladders side by side, one CPU each "
+        "('local': Ray on this machine; the output folder must be on storage every node sees)",
+    )
+    parser.add_argument(
         "--publish",
         action="store_true",
         help="at the end, write the report into BENCHMARKS.md and its plot and JSON into "
@@ -141,26 +147,45 @@ def prepare_sessions(report: BenchReport, out: Path) -> dict[str, Path]:
     return {s.spec.key: s.folder for s in report.sessions if not s.error}
 
 
+def _not_ready(ladder) -> RunRow:
+    return RunRow(
+        ladder.session,
+        ladder.preset,
+        ladder.variant,
+        ladder.budgets_s[0],
+        seed=ladder.seed,
+        status="session not ready",
+    )
+
+
 def run_fits(
     report: BenchReport, ready: dict[str, Path], out: Path, started: float, fresh: bool
 ) -> None:
-    """Every ladder of the plan; the report is rewritten after each."""
+    """Every ladder of the plan in turn; the report is rewritten after each."""
     for ladder in report.plan.ladders:
         if ladder.session not in ready:
-            report.rows.append(
-                RunRow(
-                    ladder.session,
-                    ladder.preset,
-                    ladder.variant,
-                    ladder.budgets_s[0],
-                    seed=ladder.seed,
-                    status="session not ready",
-                )
-            )
+            report.rows.append(_not_ready(ladder))
             continue
         report.rows += run_ladder(ladder, ready[ladder.session], out, fresh=fresh)
         report.wall_s = time.monotonic() - started
         write_outputs(report, out)
+
+
+def run_fits_on_ray(report: BenchReport, ready: dict[str, Path], out: Path, args) -> None:
+    """Every rung of the plan as a Ray task (ladders side by side); rows in the plan's order."""
+    from benchlib.cluster import run_ladders_on_ray
+
+    ladders = [ladder for ladder in report.plan.ladders if ladder.session in ready]
+    trained = iter(
+        run_ladders_on_ray(
+            [(ladder, ready[ladder.session]) for ladder in ladders],
+            out,
+            address=args.ray,
+            fresh=args.fresh,
+        )
+    )
+    for ladder in report.plan.ladders:
+        report.rows += next(trained) if ladder.session in ready else [_not_ready(ladder)]
 
 
 def _exit_on_sigterm(signum: int, frame) -> None:
@@ -204,7 +229,10 @@ def main(argv: list[str] | None = None, command: str | None = None) -> int:
     if main_session in ready:
         report.speed = run_speed_probe(ready[main_session], out / "logs")
         print(f"preset speed: {report.speed.error or report.speed.rays_per_s}")
-    run_fits(report, ready, out, started, args.fresh)
+    if args.ray:
+        run_fits_on_ray(report, ready, out, args)
+    else:
+        run_fits(report, ready, out, started, args.fresh)
     report.wall_s = time.monotonic() - started
     write_outputs(report, out)
     print(f"report: {out / 'report.md'} ({report.wall_s / 60:.1f} min)")

@@ -1,7 +1,7 @@
 """Blind benchmark: six sessions with randomly drawn sensors, each fitted from its recording.
 
     python tools/bench_blind.py [--out bench-out/blind] [--budget 600] [--sessions room-s10 ...]
-                                [--fresh] [--jobs 2] [--publish]
+                                [--fresh] [--jobs 2] [--ray ADDRESS] [--publish]
 
 For every session of :data:`benchlib.blind.BLIND_SESSIONS`: record it with a random sensor, fit
 ``full`` end to end (calibration and poses included) with the budget, then ``white-box`` (the
@@ -15,6 +15,7 @@ into BENCHMARKS.md between its blind-benchmark markers.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -52,7 +53,14 @@ def main(argv: list[str] | None = None) -> int:
         help="sessions run side by side, the cores shared out among them (each fit gets fewer "
         "threads, so fewer steps in its budget: scores can only be lower than alone)",
     )
+    parser.add_argument(
+        "--ray",
+        metavar="local|auto|ADDRESS",
+        help="each session as a Ray task of (cores / --jobs) CPUs ('local': Ray on this "
+        "machine; the output folder must be on storage every node sees)",
+    )
     args = parser.parse_args(argv)
+    args.out = args.out.resolve()  # Ray's workers run in other folders
     chosen = [s for s in BLIND_SESSIONS if s.key in args.sessions]
     threads = max(1, (os.cpu_count() or 1) // args.jobs)
     if args.jobs > 1:
@@ -62,8 +70,14 @@ def main(argv: list[str] | None = None) -> int:
     def run(spec):
         return spec.key, run_blind_session(spec, args.out, args.budget, fresh=args.fresh)
 
-    with ThreadPoolExecutor(args.jobs) as pool:
-        for key, row in pool.map(run, chosen):
+    with contextlib.ExitStack() as stack:
+        if args.ray:
+            from benchlib.cluster import map_on_ray
+
+            finished = map_on_ray(run, chosen, address=args.ray, cpus=threads)
+        else:
+            finished = stack.enter_context(ThreadPoolExecutor(args.jobs)).map(run, chosen)
+        for key, row in finished:
             done[key] = row
             document = {
                 "commit": source_commit(),

@@ -7,7 +7,6 @@ Modules are imported only when their verb runs, so ``seecap inspect`` never load
 from __future__ import annotations
 
 import argparse
-import errno
 import importlib
 import os
 import signal
@@ -16,7 +15,7 @@ import threading
 import warnings
 
 from davis_io import SeecapError, __version__
-from davis_io.errors import UsageError
+from davis_io.errors import UsageError, describe_error
 
 __all__ = ["VERBS", "main"]
 
@@ -79,24 +78,10 @@ def _failure(error: BaseException, verb: str, debug: bool) -> int:
     """One line for a failure, its exit code (2 for a usage error, 1 for any other)."""
     if debug:
         raise error
-    if isinstance(error, SeecapError):
-        print(f"seecap: error: {verb}: {error}", file=sys.stderr)
-        if error.exit_status is not None:
-            return error.exit_status
-        return EXIT_USAGE if isinstance(error, UsageError) else EXIT_ERROR
-    if isinstance(error, OSError) and error.filename is not None:
-        reason = error.strerror or str(error)
-        print(f"seecap: error: {verb}: {error.filename}: {reason}", file=sys.stderr)
-        return EXIT_ERROR
-    if isinstance(error, OSError) and error.errno == errno.ENOSPC:
-        print(f"seecap: error: {verb}: disk full ({error}): free some space", file=sys.stderr)
-        return EXIT_ERROR
-    print(
-        f"seecap: error: {verb}: {type(error).__name__}: {error} (this is a bug: run again "
-        "with `seecap --debug ...` for the traceback and report it)",
-        file=sys.stderr,
-    )
-    return EXIT_ERROR
+    print(f"seecap: error: {verb}: {describe_error(error)}", file=sys.stderr)
+    if isinstance(error, SeecapError) and error.exit_status is not None:
+        return error.exit_status
+    return EXIT_USAGE if isinstance(error, UsageError) else EXIT_ERROR
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from davis_io.session import seconds_argument
 from seenerf.cli.options import add_dataclass_options, dataclass_values
+from seenerf.cli.progress import TrainingBar
 from seenerf.model.config import FitConfig
 
 __all__ = ["FLAGS", "HELP", "add_arguments", "run"]
@@ -23,7 +24,9 @@ FLAGS = {"register_test_views": "--no-registration"}
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the verb's arguments: session and run, then one option per :class:`FitConfig` field."""
-    parser.add_argument("session", type=Path, help="session folder")
+    parser.add_argument(
+        "session", type=Path, nargs="+", help="session folder(s): several are fitted in turn"
+    )
     parser.add_argument("--run", default=None, help="run folder name under session/fit/")
     parser.add_argument("--fresh", action="store_true", help="start over instead of resuming")
     parser.add_argument(
@@ -34,81 +37,109 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "below are then ignored",
     )
     parser.add_argument(
+        "--ray",
+        metavar="local|auto|ADDRESS",
+        help="fit each session as a Ray task: 'local' starts Ray on this machine, 'auto' joins "
+        "the cluster `ray start` made here, ADDRESS is a cluster's head; sessions must be on "
+        "storage every node sees (needs the cluster extra)",
+    )
+    parser.add_argument(
         "--quiet", action="store_true", help="no progress bar or lines: the result only"
     )
     add_dataclass_options(parser, FitConfig, seconds=seconds_argument("--time-budget"), flags=FLAGS)
 
 
-class _TrainingBar:
-    """A tqdm bar over the training budget (or steps), with steps/s; lines printed above it."""
-
-    def __init__(self, quiet: bool):
-        self.quiet, self.bar = quiet, None
-
-    def line(self, text: str) -> None:
-        if self.quiet:
-            return
-        if self.bar is None:
-            print(text, flush=True)
-        else:
-            self.bar.write(text)
-
-    def step(self, trainer) -> None:
-        if self.quiet:
-            return
-        from tqdm import tqdm
-
-        budget = trainer.config.time_budget_s - trainer.spent_s
-        by_time = trainer.config.time_budget_s > 0
-        if self.bar is None:
-            total = round(budget) if by_time else trainer.total_steps
-            unit = "s" if by_time else "step"
-            # A log file gets a line every 30 s, not one per step.
-            interval = 0.5 if sys.stderr.isatty() else 30.0
-            self.bar = tqdm(
-                total=total, unit=unit, desc="training", dynamic_ncols=True, mininterval=interval
-            )
-        done = (
-            min(round(trainer.summary.elapsed_s), self.bar.total)
-            if by_time
-            else (trainer.summary.steps)
-        )
-        rate = trainer.summary.steps / max(trainer.summary.elapsed_s, 1e-9)
-        self.bar.set_postfix_str(f"step {trainer.summary.steps}, {rate:.1f} steps/s", refresh=False)
-        self.bar.update(done - self.bar.n)  # drawn at most once per interval
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-            self.bar = None
-
-
 def run(args: argparse.Namespace) -> int:
-    """Calibrate and estimate poses when missing, fit, print the scores; return 0."""
-    from davis_io.prepare import prepare_session
-    from seenerf.eval.scores import format_scores
+    """Make each session ready and fit it; print the scores (a table for several); 0 if all fit."""
     from seenerf.model.config import load_config
-    from seenerf.train import fit_session
-    from seenerf.train.fit import session_bins
 
     if args.config is not None:
         config = load_config(args.config)
     else:
         config = FitConfig(**dataclass_values(FitConfig, args)).validate()
-    bar = _TrainingBar(args.quiet)
+    if args.ray is None and len(args.session) == 1:
+        return _fit_here(args.session[0], config, args)
+    if args.ray is None:
+        fits = [_fit_in_turn(session, config, args) for session in args.session]
+    else:
+        fits = _fit_on_ray(config, args)
+    return _report(fits)
+
+
+def _fit_here(session: Path, config: FitConfig, args: argparse.Namespace) -> int:
+    """One session in this process; a failure propagates to the CLI's one-line report."""
+    from seenerf.cli.sessions import prepare_and_fit
+    from seenerf.eval.scores import format_scores
+
+    bar = TrainingBar(args.quiet)
     try:
-        spent_s = prepare_session(args.session, session_bins(args.session, config), bar.line)
-        result = fit_session(
-            args.session,
+        result = prepare_and_fit(
+            session,
             config,
             run_name=args.run,
             fresh=args.fresh,
-            spent_s=spent_s,
             log=bar.line,
-            on_step=bar.step,
+            on_step=lambda trainer: bar.update(trainer.training_progress()),
         )
     finally:
         bar.close()
     print(f"run: {result.run_dir}")
     print(format_scores(result.metrics))
     return 0
+
+
+def _fit_in_turn(session: Path, config: FitConfig, args: argparse.Namespace):
+    """One of several sessions in this process; its failure is kept, the next one goes on."""
+    from seenerf.cli.sessions import fit_kept_apart
+
+    bar = TrainingBar(args.quiet, label=str(session))
+    try:
+        return fit_kept_apart(
+            session,
+            config,
+            run_name=args.run,
+            fresh=args.fresh,
+            log=lambda text: bar.line(f"{session}: {text}"),
+            on_step=lambda trainer: bar.update(trainer.training_progress()),
+        )
+    finally:
+        bar.close()
+
+
+def _fit_on_ray(config: FitConfig, args: argparse.Namespace):
+    """Every session as a Ray task, with one progress bar per session."""
+    from seenerf.cli.cluster import fit_on_ray
+
+    bars = [
+        TrainingBar(args.quiet, label=str(session), position=index)
+        for index, session in enumerate(args.session)
+    ]
+    try:
+        return fit_on_ray(
+            args.session,
+            config,
+            address=args.ray,
+            run_name=args.run,
+            fresh=args.fresh,
+            on_line=lambda index, text: bars[index].line(f"{args.session[index]}: {text}"),
+            on_progress=lambda index, progress: bars[index].update(progress),
+        )
+    finally:
+        for bar in bars:
+            bar.close()
+
+
+def _report(fits) -> int:
+    """The scores of one fit, or a table of several; one error line per failed session."""
+    from seenerf.cli.sessions import score_table
+    from seenerf.eval.scores import format_scores
+
+    if len(fits) == 1 and not fits[0].error:
+        print(f"run: {fits[0].run_dir}")
+        print(format_scores(fits[0].metrics))
+    elif len(fits) > 1:
+        print(score_table(fits))
+    for fit in fits:
+        if fit.error:
+            print(f"seecap: error: fit: {fit.session}: {fit.error}", file=sys.stderr)
+    return 1 if any(fit.error for fit in fits) else 0

@@ -23,7 +23,15 @@ from seenerf.model.variants import get_variant
 from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.trainer import Trainer, TrainSummary
 
-__all__ = ["FitResult", "fit_data", "fit_session", "resolved_settings", "session_bins"]
+__all__ = [
+    "FitResult",
+    "fit_data",
+    "fit_session",
+    "resolved_settings",
+    "run_folder",
+    "session_bins",
+    "start_over",
+]
 
 
 @dataclass
@@ -41,6 +49,23 @@ def session_bins(session_dir: Path | str, config: FitConfig) -> int:
         return config.bins
     with Session.open(session_dir) as session:
         return int(getattr(session.manifest, "b", 0) or DEFAULT_BINS)
+
+
+def run_folder(session_dir: Path | str, config: FitConfig, run_name: str | None) -> Path:
+    """``session/fit/<run>/``: the run's name, or ``<preset>-<variant>`` by default."""
+    return Path(session_dir) / "fit" / (run_name or f"{config.preset}-{config.variant}")
+
+
+def start_over(run_dir: Path) -> None:
+    """Remove a run's checkpoint and outputs so that its next fit starts from scratch."""
+    if not run_dir.is_dir():
+        return
+    with writer_lock(run_dir, f"clearing {run_dir.name}"):
+        for child in run_dir.iterdir():
+            if child.is_dir():
+                shutil.rmtree(child)
+            elif child.name != LOCK_NAME:
+                child.unlink()
 
 
 def fit_session(
@@ -75,7 +100,7 @@ def fit_session(
         sensor_from_truth=variant.sensor_from_truth,
         threshold=config.threshold,
     )
-    run_dir = session_dir / "fit" / (run_name or f"{config.preset}-{config.variant}")
+    run_dir = run_folder(session_dir, config, run_name)
     spent_s += time.perf_counter() - start
     return fit_data(data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s, on_step=on_step)
 
@@ -125,11 +150,8 @@ def fit_data(
 
 
 def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
-    for child in run_dir.iterdir() if fresh else ():
-        if child.is_dir():
-            shutil.rmtree(child)
-        elif child.name != LOCK_NAME:
-            child.unlink()
+    if fresh:
+        start_over(run_dir)
     log = _logged_to(run_dir / "log.txt", log)
     trainer = Trainer(data, config, run_dir, log, spent_s, on_step)
     threads = torch.get_num_threads() if trainer.device == "cpu" else 0

@@ -29,7 +29,7 @@ from seenerf.train.losses import (
 )
 from seenerf.train.stopping import StopRequest, stop_requests
 
-__all__ = ["TrainSummary", "Trainer"]
+__all__ = ["TrainSummary", "Trainer", "TrainingProgress"]
 
 GRID_WARMUP_STEPS = 50
 """Steps before the first occupancy refresh (the field is still blank before)."""
@@ -67,6 +67,23 @@ class TrainSummary:
     samples_per_ray: float = 0.0
     skipped_steps: int = 0
     history: list = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class TrainingProgress:
+    """Where a training run stands, for a progress display (small: it may cross processes).
+
+    Attributes:
+        steps: steps completed (including resumed ones).
+        elapsed_s: training seconds (including resumed ones).
+        total_steps: the step count that ends the run (inf: none).
+        budget_s: training seconds the time budget leaves after preparation (inf: none).
+    """
+
+    steps: int
+    elapsed_s: float
+    total_steps: float
+    budget_s: float
 
 
 class Trainer:
@@ -200,6 +217,12 @@ class Trainer:
         if self.config.time_budget_s <= 0:
             return math.inf
         return self.config.time_budget_s - self.spent_s
+
+    def training_progress(self) -> TrainingProgress:
+        """Steps and seconds done against the run's step count and time budget."""
+        return TrainingProgress(
+            self.summary.steps, self.summary.elapsed_s, self.total_steps, self._training_budget()
+        )
 
     def _budget_left(self) -> float:
         return self._training_budget() - self.summary.elapsed_s

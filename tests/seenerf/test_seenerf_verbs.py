@@ -56,9 +56,7 @@ def test_fit_writes_every_output(tiny_scene, tmp_path):
 
 
 def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkeypatch, tmp_path):
-    import davis_io.prepare
-    import seenerf.train
-    import seenerf.train.fit
+    import seenerf.cli.sessions
 
     seen = {}
 
@@ -70,9 +68,9 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
         seen["config"], seen["spent_s"] = config, spent_s
         raise SystemExit(0)
 
-    monkeypatch.setattr(davis_io.prepare, "prepare_session", fake_prepare)
-    monkeypatch.setattr(seenerf.train.fit, "session_bins", lambda session, config: 4)
-    monkeypatch.setattr(seenerf.train, "fit_session", fake_fit_session)
+    monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", fake_prepare)
+    monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)
+    monkeypatch.setattr(seenerf.cli.sessions, "fit_session", fake_fit_session)
     parser = argparse.ArgumentParser()
     fit_verb.add_arguments(parser)
     with pytest.raises(SystemExit):
@@ -95,18 +93,16 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
 
 
 def test_a_stopped_fit_exits_143_with_one_line(monkeypatch, tmp_path, capsys):
-    import davis_io.prepare
-    import seenerf.train
-    import seenerf.train.fit
+    import seenerf.cli.sessions
     from davis_io.cli import main
     from seenerf.errors import TrainingStopped
 
     def stopped(*args, **kwargs):
         raise TrainingStopped("stopped at step 7 (SIGTERM); checkpoint saved in x", 15)
 
-    monkeypatch.setattr(davis_io.prepare, "prepare_session", lambda session, b, log=print: 0.0)
-    monkeypatch.setattr(seenerf.train.fit, "session_bins", lambda session, config: 4)
-    monkeypatch.setattr(seenerf.train, "fit_session", stopped)
+    monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", lambda session, b, log=print: 0.0)
+    monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)
+    monkeypatch.setattr(seenerf.cli.sessions, "fit_session", stopped)
     assert main(["fit", str(tmp_path), "--quiet"]) == 143
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["seecap: error: fit: stopped at step 7 (SIGTERM); checkpoint saved in x"]

@@ -95,12 +95,12 @@ def test_a_real_small_disk_through_the_recorder(tmp_path):
         subprocess.run(["umount", str(mount)], check=False)
 
 
-FIT_ON_SMALL_DISK = Path(__file__).parents[1] / "seenerf" / "fit_on_small_disk.py"
+TINY_FIT = Path(__file__).parents[1] / "seenerf" / "tiny_fit.py"
 
 
 def _fit_into(folder: Path) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, str(FIT_ON_SMALL_DISK), str(folder)],
+        [sys.executable, str(TINY_FIT), str(folder)],
         capture_output=True,
         text=True,
         timeout=300,

@@ -17,10 +17,14 @@ __all__ = [
     "SpeedProbe",
     "fit_command",
     "kept_path",
+    "kept_row",
+    "ladder_goes_on",
     "reusable_rungs",
+    "rung_line",
     "run_ladder",
     "run_name",
     "run_speed_probe",
+    "train_rung",
 ]
 
 KEPT_KEY = "bench"
@@ -151,7 +155,72 @@ def _keep(path: Path, metrics: dict, session_dir: Path, usage: ProcessUsage) -> 
     path.write_text(json.dumps({**metrics, KEPT_KEY: made}, indent=1) + "\n")
 
 
-def _progress_line(tag: str, row: RunRow) -> str:
+def kept_row(ladder: Ladder, index: int, metrics: dict) -> RunRow:
+    """The row of a rung an earlier invocation trained, read back from its kept metrics."""
+    row = RunRow(
+        ladder.session, ladder.preset, ladder.variant, ladder.budgets_s[index], seed=ladder.seed
+    )
+    row.process = usage_from_json(metrics[KEPT_KEY]["process"])
+    row.reused = True
+    return row_from_metrics(row, metrics)
+
+
+def train_rung(
+    ladder: Ladder,
+    index: int,
+    session_dir: Path,
+    out_dir: Path,
+    *,
+    first_trained: bool,
+    threads: int = 0,
+) -> RunRow:
+    """Train rung ``index`` in its own ``seecap fit`` process (resuming the rung before it).
+
+    Args:
+        ladder: session, preset, variant and budgets.
+        index: which budget of the ladder.
+        session_dir: the prepared session folder.
+        out_dir: the benchmark's output folder (logs and per-rung metrics go under it).
+        first_trained: the first rung this invocation trains: the kept metrics of its budget
+            and every larger one are removed, since its training changes their checkpoint.
+        threads: torch threads of the fit (0: torch's default, every core).
+
+    Returns:
+        The rung's scored row, or a row whose status says why it failed.
+    """
+    budget = ladder.budgets_s[index]
+    row = RunRow(ladder.session, ladder.preset, ladder.variant, budget, seed=ladder.seed)
+    if first_trained:
+        for path in kept_path(out_dir, ladder, budget).parent.glob("*s.json"):
+            if not _kept_budget(path) < budget:  # this rung's, later ones, unreadable
+                path.unlink()
+    name = run_name(ladder)
+    log = out_dir / "logs" / ladder.session / name / f"{budget:g}s.log"
+    command = fit_command(session_dir, ladder, budget, fresh=index == 0)
+    row.process = run_measured(
+        command + (["--threads", str(threads)] if threads else []),
+        log,
+        timeout_s=budget + FIT_OVERHEAD_S,
+    )
+    metrics_path = session_dir / "fit" / name / "metrics.json"
+    if row.process.returncode != 0 or not metrics_path.exists():
+        row.status = _failure(log, row.process.returncode, row.process.timed_out)
+        return row
+    metrics = json.loads(metrics_path.read_text())
+    _keep(kept_path(out_dir, ladder, budget), metrics, session_dir, row.process)
+    return row_from_metrics(row, metrics)
+
+
+def ladder_goes_on(row: RunRow) -> bool:
+    """Whether the rung above ``row`` is trained: not after a failure or an early stop."""
+    return row.ok and row.stopped == "budget"
+
+
+def rung_line(ladder: Ladder, row: RunRow) -> str:
+    """One progress line of a rung of ``ladder``: its scores and cost, or its failure."""
+    tag = f"{ladder.session}/{run_name(ladder)}/{row.budget_s:g}s"
+    if not row.ok:
+        return f"{tag}: {row.status}"
     usage = row.process
     how = "read back" if row.reused else f"{usage.wall_s:.0f} s wall, {usage.peak_rss_mb:.0f} MB"
     return (
@@ -173,9 +242,7 @@ def run_ladder(
     Each rung resumes the previous rung's checkpoint, so the 10-minute row costs 10 minutes of
     training in total, not 1 + 3 + 10. A rung that fails, or whose run already stopped before
     its budget (step count or plateau), ends the ladder. Rungs an earlier invocation finished
-    (:func:`reusable_rungs`) are read back, not trained, unless ``fresh``; before a rung is
-    trained, the kept metrics of its budget and every larger one are removed, since its
-    training changes the checkpoint they came from.
+    (:func:`reusable_rungs`) are read back, not trained, unless ``fresh``.
 
     Args:
         ladder: session, preset, variant and budgets.
@@ -185,37 +252,14 @@ def run_ladder(
         progress: receives one line per rung.
     """
     rows = []
-    name = run_name(ladder)
     kept = [] if fresh else reusable_rungs(ladder, session_dir, out_dir)
-    for index, budget in enumerate(ladder.budgets_s):
-        tag = f"{ladder.session}/{name}/{budget:g}s"
-        row = RunRow(ladder.session, ladder.preset, ladder.variant, budget, seed=ladder.seed)
+    for index in range(len(ladder.budgets_s)):
         if index < len(kept):
-            metrics = kept[index]
-            row.process = usage_from_json(metrics[KEPT_KEY]["process"])
-            row.reused = True
+            row = kept_row(ladder, index, kept[index])
         else:
-            if index == len(kept):
-                folder = kept_path(out_dir, ladder, budget).parent
-                for path in folder.glob("*s.json"):
-                    if not _kept_budget(path) < budget:  # this rung's, later ones, unreadable
-                        path.unlink()
-            log = out_dir / "logs" / ladder.session / name / f"{budget:g}s.log"
-            row.process = run_measured(
-                fit_command(session_dir, ladder, budget, fresh=index == 0),
-                log,
-                timeout_s=budget + FIT_OVERHEAD_S,
-            )
-            metrics_path = session_dir / "fit" / name / "metrics.json"
-            if row.process.returncode != 0 or not metrics_path.exists():
-                row.status = _failure(log, row.process.returncode, row.process.timed_out)
-                rows.append(row)
-                progress(f"{tag}: {row.status}")
-                break
-            metrics = json.loads(metrics_path.read_text())
-            _keep(kept_path(out_dir, ladder, budget), metrics, session_dir, row.process)
-        rows.append(row_from_metrics(row, metrics))
-        progress(_progress_line(tag, row))
-        if row.stopped != "budget":
+            row = train_rung(ladder, index, session_dir, out_dir, first_trained=index == len(kept))
+        rows.append(row)
+        progress(rung_line(ladder, row))
+        if not ladder_goes_on(row):
             break
     return rows

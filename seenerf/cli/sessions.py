@@ -1,0 +1,102 @@
+"""What ``seecap fit`` does per session: make it ready, fit it, keep a failure to that session."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from davis_io import describe_error
+from davis_io.prepare import prepare_session
+from seenerf.errors import TrainingStopped
+from seenerf.model.config import FitConfig
+from seenerf.train.fit import FitResult, fit_session, session_bins
+from seenerf.train.trainer import Trainer
+
+__all__ = ["SessionFit", "fit_kept_apart", "prepare_and_fit", "score_table"]
+
+
+@dataclass
+class SessionFit:
+    """One session's fit among several: its run folder and scores, or why it failed.
+
+    Attributes:
+        session: the session folder as given.
+        run_dir: the run folder (None when the fit failed before it existed).
+        metrics: the run's ``metrics.json`` payload (None on failure).
+        error: one line saying what went wrong ("" when fitted).
+    """
+
+    session: Path
+    run_dir: Path | None = None
+    metrics: dict | None = None
+    error: str = ""
+
+
+def prepare_and_fit(
+    session_dir: Path | str,
+    config: FitConfig,
+    *,
+    run_name: str | None = None,
+    fresh: bool = False,
+    log: Callable[[str], None] = print,
+    on_step: Callable[[Trainer], None] | None = None,
+) -> FitResult:
+    """Calibrate the sensor and estimate poses when missing, then fit (the budget counts both)."""
+    spent_s = prepare_session(session_dir, session_bins(session_dir, config), log)
+    return fit_session(
+        session_dir,
+        config,
+        run_name=run_name,
+        fresh=fresh,
+        spent_s=spent_s,
+        log=log,
+        on_step=on_step,
+    )
+
+
+def fit_kept_apart(session_dir: Path | str, config: FitConfig, **options) -> SessionFit:
+    """:func:`prepare_and_fit` with a failure kept as the session's error line.
+
+    A stop asked for (Ctrl-C, SIGTERM) is not a failure of the session: it propagates.
+    """
+    try:
+        result = prepare_and_fit(session_dir, config, **options)
+    except TrainingStopped:
+        raise
+    except Exception as error:  # noqa: BLE001 - one session's failure must not end the others
+        return SessionFit(Path(session_dir), error=describe_error(error))
+    return SessionFit(Path(session_dir), result.run_dir, result.metrics)
+
+
+def _cell(value: float | None, digits: int) -> str:
+    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def score_table(fits: list[SessionFit]) -> str:
+    """A fixed-width table: one row per session with its headline scores, or ``failed``."""
+    header = ("session", "run", "HDR dB", "novel dB", "log contrast", "steps", "result")
+    rows = [header]
+    for fit in fits:
+        metrics = fit.metrics or {}
+        contrast = metrics.get("log_contrast")
+        rows.append(
+            (
+                str(fit.session),
+                fit.run_dir.name if fit.run_dir else "-",
+                _cell(metrics.get("hdr", {}).get("psnr"), 2),
+                _cell(metrics.get("novel_exposure", {}).get("psnr"), 2),
+                _cell(sum(contrast) / len(contrast) if contrast else None, 3),
+                str(metrics.get("training", {}).get("steps", "-")),
+                "failed" if fit.error else "fitted",
+            )
+        )
+    widths = [max(len(row[i]) for row in rows) for i in range(len(header))]
+    return "\n".join(
+        "  ".join(
+            cell.ljust(width) if i < 2 else cell.rjust(width)
+            for i, (cell, width) in enumerate(zip(row, widths, strict=True))
+        ).rstrip()
+        for row in rows
+    )

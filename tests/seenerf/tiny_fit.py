@@ -1,0 +1,19 @@
+"""``seecap fit FOLDER [options]`` of a tiny analytic scene (preparation skipped), in a process of
+its own; prints ``ray imported: True|False`` after the fit."""
+
+import sys
+
+import seenerf.cli.sessions
+import seenerf.train.fit
+from davis_io.cli import main
+from seenerf.data.synthetic import plane_scene
+
+if __name__ == "__main__":
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
+    seenerf.cli.sessions.prepare_session = lambda session, b, log=print: 0.0
+    seenerf.cli.sessions.session_bins = seenerf.train.fit.session_bins = lambda session, config: 2
+    seenerf.train.fit.load_training_data = lambda *args, **kwargs: scene
+    arguments = ["fit", *sys.argv[1:], "--steps", "3", "--batch-pixels", "6", "--warm-steps", "2"]
+    status = main([*arguments, "--validation-share", "0.1", "--quiet"])
+    print(f"ray imported: {'ray' in sys.modules}")
+    sys.exit(status)

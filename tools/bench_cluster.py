@@ -1,0 +1,88 @@
+"""Cluster benchmark: the quick plan run locally, then as Ray tasks on a local instance.
+
+    python tools/bench_cluster.py [--out bench-out/cluster] [--publish]
+
+Runs ``tools/bench.py --quick --no-capture --fresh`` twice in child processes, the second with
+``--ray local`` (every rung a Ray task, the ladders side by side), and puts wall times and every
+rung's scores side by side. Writes ``OUT/cluster.json`` and ``OUT/cluster.md``; ``--publish``
+copies the JSON to ``bench-results/`` and splices the report into BENCHMARKS.md between its
+cluster markers. About half an hour on 2 cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from benchlib.cluster import FIT_THREADS
+from benchlib.machine import describe_machine, exact_command, source_commit
+from benchlib.publish import CLUSTER_BEGIN, CLUSTER_END, RESULTS_FOLDER, splice
+from benchlib.side_by_side import ROW_FIELDS, side_by_side_report
+
+ROOT = Path(__file__).resolve().parents[1]
+WAYS = {"local": [], "ray": ["--ray", "local"]}
+
+
+def _run(way: str, out: Path) -> dict:
+    """The quick plan one way, in a child process; its wall time and every rung's scores."""
+    arguments = ["tools/bench.py", "--quick", "--no-capture", "--fresh", "--out", str(out / way)]
+    command = [*arguments, *WAYS[way]]
+    start = time.monotonic()
+    with open(out / f"{way}.log", "wb") as log:
+        done = subprocess.run([sys.executable, "-u", *command], cwd=ROOT, stdout=log, stderr=log)
+    wall_s = time.monotonic() - start
+    results = json.loads((out / way / "results.json").read_text())
+    rows = [
+        {
+            **{key: row[key] for key in ROW_FIELDS},
+            "hdr_psnr": row["hdr_psnr"],
+            "novel_psnr": row["novel_psnr"],
+        }
+        for row in results["rows"]
+    ]
+    return {
+        "command": " ".join(command),
+        "returncode": done.returncode,
+        "wall_s": wall_s,
+        "rows": rows,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("bench-out/cluster"))
+    parser.add_argument(
+        "--publish", action="store_true", help="copy the results into the repository's report"
+    )
+    args = parser.parse_args(argv)
+    out = args.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    document = {
+        "commit": source_commit(),
+        "command": exact_command(),
+        "machine": describe_machine().line(),
+        "ray_cpus_per_fit": FIT_THREADS,
+        "runs": {},
+    }
+    for way in WAYS:
+        document["runs"][way] = _run(way, out)
+        print(f"{way}: {document['runs'][way]['wall_s'] / 60:.1f} min")
+    (out / "cluster.json").write_text(json.dumps(document, indent=1) + "\n")
+    report = side_by_side_report(document)
+    (out / "cluster.md").write_text(report + "\n")
+    print(report)
+    if args.publish:
+        (ROOT / RESULTS_FOLDER).mkdir(exist_ok=True)
+        (ROOT / RESULTS_FOLDER / "cluster.json").write_text(json.dumps(document, indent=1) + "\n")
+        benchmarks = ROOT / "BENCHMARKS.md"
+        benchmarks.write_text(splice(benchmarks.read_text(), report, CLUSTER_BEGIN, CLUSTER_END))
+    failed = [way for way, run in document["runs"].items() if run["returncode"] != 0]
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
