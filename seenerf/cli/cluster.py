@@ -88,6 +88,11 @@ def ray_connection(address: str, cpus: int | None = None) -> Iterator[object]:
             f"no Ray cluster answers at {address!r} ({error}): start one with `ray start "
             "--head` (and `ray start --address HEAD:6379` on each worker), or use --ray local"
         ) from error
+    except Exception as error:  # noqa: BLE001 - Ray raises a bare Exception when a node stalls
+        raise ConfigError(
+            f"Ray did not start at {address!r} ({error}): on a busy machine run again when it "
+            "is quieter, or start Ray yourself (`ray start --head`) and use --ray auto"
+        ) from error
     try:
         yield ray
     finally:

@@ -25,7 +25,7 @@ FLAGS = {"register_test_views": "--no-registration"}
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the verb's arguments: session and run, then one option per :class:`FitConfig` field."""
     parser.add_argument(
-        "session", type=Path, nargs="+", help="session folder(s): several are fitted in turn"
+        "session", type=Path, nargs="+", help="session folder(s): in turn, or at once with --ray"
     )
     parser.add_argument("--run", default=None, help="run folder name under session/fit/")
     parser.add_argument("--fresh", action="store_true", help="start over instead of resuming")
