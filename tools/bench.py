@@ -5,7 +5,7 @@ One command regenerates every number of the report:
     python tools/bench.py [--quick] [--out bench-out] [--poses auto|estimated|truth]
                           [--presets fast ...] [--variants full ...] [--budgets 60 180 ...]
                           [--table-budget S] [--table4 | --no-table4] [--scenes | --no-scenes]
-                          [--no-capture] [--fresh] [--ray ADDRESS] [--publish]
+                          [--no-capture] [--fresh] [--threads N] [--ray ADDRESS] [--publish]
 
 1. Sessions: the ``room`` benchmark of ``make_benchmark.py``, the Table 4 sessions (input
    exposure x1/16, x1, x16 of 0.016 s at a fixed gain; DVS noise x1, x2, x4) and the other four
@@ -104,6 +104,13 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
         help="train every rung again instead of reading back earlier ones",
     )
     parser.add_argument(
+        "--threads",
+        type=int,
+        default=0,
+        help="torch threads of every fit (default 0: torch's own, every core; with --ray one "
+        "per fit)",
+    )
+    parser.add_argument(
         "--ray",
         metavar="local|auto|ADDRESS",
         help="train every rung as a Ray task, the ladders side by side, one CPU each "
@@ -158,15 +165,15 @@ def _not_ready(ladder) -> RunRow:
     )
 
 
-def run_fits(
-    report: BenchReport, ready: dict[str, Path], out: Path, started: float, fresh: bool
-) -> None:
+def run_fits(report: BenchReport, ready: dict[str, Path], out: Path, started: float, args) -> None:
     """Every ladder of the plan in turn; the report is rewritten after each."""
     for ladder in report.plan.ladders:
         if ladder.session not in ready:
             report.rows.append(_not_ready(ladder))
             continue
-        report.rows += run_ladder(ladder, ready[ladder.session], out, fresh=fresh)
+        report.rows += run_ladder(
+            ladder, ready[ladder.session], out, fresh=args.fresh, threads=args.threads
+        )
         report.wall_s = time.monotonic() - started
         write_outputs(report, out)
 
@@ -232,7 +239,7 @@ def main(argv: list[str] | None = None, command: str | None = None) -> int:
     if args.ray:
         run_fits_on_ray(report, ready, out, args)
     else:
-        run_fits(report, ready, out, started, args.fresh)
+        run_fits(report, ready, out, started, args)
     report.wall_s = time.monotonic() - started
     write_outputs(report, out)
     print(f"report: {out / 'report.md'} ({report.wall_s / 60:.1f} min)")

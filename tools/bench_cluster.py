@@ -2,9 +2,10 @@
 
     python tools/bench_cluster.py [--out bench-out/cluster] [--publish]
 
-Runs ``tools/bench.py --quick --no-capture --fresh`` twice in child processes, the second with
-``--ray local`` (every rung a Ray task, the ladders side by side), and puts wall times and every
-rung's scores side by side. Writes ``OUT/cluster.json`` and ``OUT/cluster.md``; ``--publish``
+Runs ``tools/bench.py --quick --no-capture --fresh`` twice in child processes, each fit on one
+core: first one rung after another (``--threads 1``), then with ``--ray local`` (every rung a
+Ray task of one CPU, the ladders side by side), and puts wall times and every rung's scores side
+by side. Writes ``OUT/cluster.json`` and ``OUT/cluster.md``; ``--publish``
 copies the JSON to ``bench-results/`` and splices the report into BENCHMARKS.md between its
 cluster markers. About half an hour on 2 cores.
 """
@@ -24,7 +25,8 @@ from benchlib.publish import CLUSTER_BEGIN, CLUSTER_END, RESULTS_FOLDER, splice
 from benchlib.side_by_side import ROW_FIELDS, side_by_side_report
 
 ROOT = Path(__file__).resolve().parents[1]
-WAYS = {"local": [], "ray": ["--ray", "local"]}
+WAYS = {"local": ["--threads", str(FIT_THREADS)], "ray": ["--ray", "local"]}
+"""Both give each fit one core, so that their scores compare: one fit at a time, or side by side."""
 
 
 def _run(way: str, out: Path) -> dict:

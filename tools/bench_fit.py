@@ -24,12 +24,13 @@ from pathlib import Path
 import torch
 
 from davis_io.poses.truth import store_true_poses
+from davis_io.prepare import prepare_session
 from davis_io.session import DEFAULT_BINS
 from seenerf.data.session import load_training_data
 from seenerf.data.synthetic import plane_scene
 from seenerf.model.config import DEFAULT_VARIANT, FitConfig
 from seenerf.model.presets import DEFAULT_PRESET
-from seenerf.train.fit import ensure_poses, fit_data
+from seenerf.train.fit import fit_data
 from seenerf.train.trainer import Trainer
 
 
@@ -127,7 +128,7 @@ def quality(
 ) -> dict:
     start = time.perf_counter()
     try:
-        ensure_poses(session_dir, b, print)
+        prepare_session(session_dir, b, print)
         pose_source = "estimated"
     except Exception as error:  # the estimator is optional here: report and fall back
         if not true_poses:

@@ -75,6 +75,7 @@ def ray_connection(address: str, cpus: int | None = None) -> Iterator[object]:
     try:
         if address == "local":
             ray.init(
+                address="local",  # a new instance, even where `ray start` made one
                 num_cpus=cpus,
                 include_dashboard=False,
                 _node_ip_address="127.0.0.1",

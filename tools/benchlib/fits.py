@@ -235,6 +235,7 @@ def run_ladder(
     out_dir: Path,
     *,
     fresh: bool = False,
+    threads: int = 0,
     progress: Callable[[str], None] = print,
 ) -> list[RunRow]:
     """Train ``ladder`` up each budget in turn; one scored row per rung.
@@ -249,6 +250,7 @@ def run_ladder(
         session_dir: the prepared session folder.
         out_dir: the benchmark's output folder (logs and per-rung metrics go under it).
         fresh: train every rung, the first from scratch, ignoring earlier invocations.
+        threads: torch threads of each fit (0: torch's default, every core).
         progress: receives one line per rung.
     """
     rows = []
@@ -257,7 +259,10 @@ def run_ladder(
         if index < len(kept):
             row = kept_row(ladder, index, kept[index])
         else:
-            row = train_rung(ladder, index, session_dir, out_dir, first_trained=index == len(kept))
+            first = index == len(kept)
+            row = train_rung(
+                ladder, index, session_dir, out_dir, first_trained=first, threads=threads
+            )
         rows.append(row)
         progress(rung_line(ladder, row))
         if not ladder_goes_on(row):

@@ -1,4 +1,5 @@
-"""Give a benchmark session poses before any fit: estimated (the real pipeline) or the truth's.
+"""Give a benchmark session poses and its calibration before any fit: poses estimated (the real
+pipeline, calibration first) or the truth's.
 
 python -m benchlib.poses_step --session DIR --bins 4 --source estimated|truth
 """
@@ -38,22 +39,24 @@ def resolve_pose_source(requested: str, quick: bool) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Store poses for ``--bins`` unless present; print the seconds spent."""
+    """Store poses for ``--bins``; print the seconds spent; calibrate the sensor if not yet."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--session", type=Path, required=True, help="session folder")
     parser.add_argument("--bins", type=int, default=DEFAULT_BINS, help="event bins per exposure b")
     parser.add_argument("--source", choices=POSE_SOURCES, default="estimated")
     args = parser.parse_args(argv)
+    from davis_io.prepare import prepare_session
+
     start = time.perf_counter()
     if args.source == "truth":
         from davis_io.poses.truth import store_true_poses
 
         store_true_poses(args.session, args.bins)
     else:
-        from seenerf.train.fit import ensure_poses
-
-        ensure_poses(args.session, args.bins, print)
+        prepare_session(args.session, args.bins, print)
     print(f"poses ({args.source}, b={args.bins}): {time.perf_counter() - start:.1f} s")
+    # Every fit of the session finds its sensor measured: fits side by side never race to it.
+    prepare_session(args.session, args.bins, print)
     return 0
 
 

@@ -91,8 +91,9 @@ def _save_costs(outcome: SessionOutcome) -> None:
 
 
 def _has_poses(folder: Path) -> bool:
+    """Poses and the sensor's calibration both stored (what every fit reads)."""
     with Session.open(folder) as session:
-        return session.poses(BINS) is not None
+        return session.poses(BINS) is not None and session.calibration() is not None
 
 
 def _record_command(spec: SessionSpec, folder: Path, views: tuple[int, int]) -> list[str]:

@@ -51,9 +51,9 @@ def side_by_side_report(document: dict) -> str:
     lines = [
         f"Measured at {document['commit']} on {document['machine']}: `{document['command']}`.",
         "",
-        f"The quick plan (`{local['command']}`) as today, one rung after another with every core "
-        f"per fit, then each rung a Ray task on a local instance (`--ray local`), ladders side "
-        f"by side with {document['ray_cpus_per_fit']} CPU each.",
+        f"The quick plan with {document['ray_cpus_per_fit']} core per fit: one rung after "
+        f"another (`{local['command']}`), then each rung a Ray task on a local instance "
+        f"(`{ray['command']}`), the ladders side by side.",
         "",
         "| | local | Ray, local instance |",
         "|---|---|---|",
