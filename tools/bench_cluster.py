@@ -7,7 +7,7 @@ core: first one rung after another (``--threads 1``), then with ``--ray local`` 
 Ray task of one CPU, the ladders side by side), and puts wall times and every rung's scores side
 by side. Writes ``OUT/cluster.json`` and ``OUT/cluster.md``; ``--publish``
 copies the JSON to ``bench-results/`` and splices the report into BENCHMARKS.md between its
-cluster markers. About half an hour on 2 cores.
+cluster markers. About 15 minutes on 2 cores.
 """
 
 from __future__ import annotations

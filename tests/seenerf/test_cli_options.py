@@ -91,7 +91,7 @@ def _fit_parser() -> argparse.ArgumentParser:
 def test_fit_verb_defaults_are_fit_config_defaults(tmp_path):
     args = _fit_parser().parse_args([str(tmp_path)])
     assert FitConfig(**dataclass_values(FitConfig, args)) == FitConfig()
-    assert (args.session, args.run, args.fresh) == (tmp_path, None, False)
+    assert (args.session, args.run, args.fresh, args.ray) == ([tmp_path], None, False, None)
 
 
 def test_fit_verb_keeps_its_option_names(tmp_path):
