@@ -24,7 +24,14 @@ from seenerf.model.config import FitConfig
 from seenerf.train.fit import run_folder, start_over
 from seenerf.train.trainer import TrainingProgress
 
-__all__ = ["RAY_MISSING", "RETRIES", "fit_on_ray", "import_ray", "ray_connection"]
+__all__ = [
+    "RAY_MISSING",
+    "RETRIES",
+    "cancel_tasks",
+    "fit_on_ray",
+    "import_ray",
+    "ray_connection",
+]
 
 RAY_MISSING = "Ray is not installed: pip install -e '.[cluster]' installs it (or pip install ray)"
 
@@ -98,6 +105,14 @@ def ray_connection(address: str, cpus: int | None = None) -> Iterator[object]:
         yield ray
     finally:
         ray.shutdown()
+
+
+def cancel_tasks(ray, refs: list, wait_s: float = 0.0) -> None:
+    """Cancel Ray tasks (a running one is interrupted); wait up to ``wait_s`` for them to end."""
+    for ref in refs:
+        ray.cancel(ref)
+    if refs and wait_s > 0:
+        ray.wait(refs, num_returns=len(refs), timeout=wait_s)
 
 
 class _Progress:
@@ -216,8 +231,6 @@ def fit_on_ray(
                     index = pending.pop(ref)
                     fits[index] = _gathered(ray, ref, Path(sessions[index]))
         except KeyboardInterrupt:
-            for ref in pending:
-                ray.cancel(ref)
-            ray.wait(list(pending), num_returns=len(pending), timeout=CANCEL_WAIT_S)
+            cancel_tasks(ray, list(pending), wait_s=CANCEL_WAIT_S)
             raise
     return [replace(fit, session=Path(given)) for fit, given in zip(fits, sessions, strict=True)]

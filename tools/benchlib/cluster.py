@@ -11,7 +11,7 @@ from benchlib.fits import kept_row, ladder_goes_on, reusable_rungs, rung_line, t
 from benchlib.plan import Ladder
 from benchlib.results import RunRow
 from davis_io import describe_error
-from seenerf.cli.cluster import RETRIES, ray_connection
+from seenerf.cli.cluster import RETRIES, cancel_tasks, ray_connection
 
 __all__ = ["FIT_THREADS", "map_on_ray", "run_ladders_on_ray"]
 
@@ -53,8 +53,7 @@ def map_on_ray(
                 (ref,), pending = ray.wait(pending, num_returns=1)
                 yield ray.get(ref)
         except BaseException:  # Ctrl-C, or the caller stopped early: nothing left running
-            for ref in pending:
-                ray.cancel(ref)
+            cancel_tasks(ray, pending)
             raise
 
 
@@ -101,8 +100,7 @@ def run_ladders_on_ray(
                 if finished[ref] is not None:
                     progress(rung_line(ladder, finished[ref]))
         except KeyboardInterrupt:  # each running rung kills its fit's process group
-            for ref in pending:
-                ray.cancel(ref)
+            cancel_tasks(ray, list(pending))
             raise
     return [rows + _up_to_the_end(finished[ref] for ref in refs) for rows, refs in chains]
 
