@@ -17,6 +17,7 @@ from davis_io.calibration.consistency import (
     fit_pixel_factors,
     fit_thresholds,
 )
+from davis_io.calibration.dead_time import dead_time_us
 from davis_io.calibration.pixel_events import pixel_events
 from davis_io.calibration.response_fit import (
     FrameLevels,
@@ -197,6 +198,8 @@ def calibrate_frames(
         f"response {'linear' if is_linear else 'not linear'}: the free curve is a power "
         f"{power:.2f} of v - {black:.3f} to {straightness:.3f} RMS"
     )
+    dead_time = dead_time_us(recording.times_us, recording.x, recording.y, width)
+    progress(f"pixel dead time {dead_time} µs")
     return SensorCalibration(
         threshold_on=float(theta[0]),
         threshold_off=float(theta[1]),
@@ -206,6 +209,7 @@ def calibrate_frames(
         black_level=levels.black_level or (black if is_linear else 0.0),
         saturation=levels.saturation,
         response_linear=bool(is_linear),
+        dead_time_us=dead_time,
         response_value=response.knots,
         response_log_exposure=response.log_exposure,
         pixel_factor_on=every.factor_on.reshape(height, width).astype(np.float32),
@@ -215,5 +219,5 @@ def calibrate_frames(
         source="measured",
         method="frame/event consistency of consecutive exposures (blur integral, free "
         "inverse response, per-pixel factors), latency profiled; uncertainty: split-half "
-        "spread over the pixels",
+        "spread over the pixels; dead time: 1st percentile of a pixel's event intervals",
     )

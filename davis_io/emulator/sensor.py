@@ -57,6 +57,15 @@ class Sensor:
         """How late a pixel fires by its one-step delay, at DVS steps of ``step_us``."""
         return step_us if self.dvs.one_step_delay and self.dvs.cutoff_hz > 0 else 0
 
+    def dead_time_us(self, step_us: int) -> int:
+        """Shortest interval between the events of a pixel that must fire many times in a row.
+
+        Its refractory period, or one DVS step of ``step_us`` when that is longer: the events a
+        pixel owes share the step's sub-steps, so one held back by its refractory period fires
+        again in a later step.
+        """
+        return max(self.dvs.refractory_us, step_us) if self.dvs.refractory_us > 0 else 0
+
     def with_noise_scaled(self, scale: float) -> Sensor:
         """The same sensor with its DVS leak and shot-noise rates times ``scale``."""
         if scale == 1.0:
@@ -75,7 +84,7 @@ class Sensor:
         count stands for on average (a change ``d`` gives ``d / theta`` events at a pixel of
         threshold ``theta``). ``event_delay_us`` adds to the latency the one DVS step of
         ``step_us`` by which a one-step-delay pixel fires late (the low-pass lag, which depends
-        on the light, is not in it).
+        on the light, is not in it); ``dead_time_us`` is :meth:`dead_time_us`.
         """
         out = {
             "dvs": dataclasses.asdict(self.dvs),
@@ -83,6 +92,7 @@ class Sensor:
             "color_filter": self.color_filter.value,
             "latency_us": self.latency_us,
             "event_delay_us": self.latency_us + self.step_delay_us(step_us),
+            "dead_time_us": self.dead_time_us(step_us),
         }
         if pixels is not None:
             for name, values in (("on", pixels.threshold_on), ("off", pixels.threshold_off)):

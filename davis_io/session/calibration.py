@@ -52,6 +52,8 @@ class SensorCalibration:
         response_linear: frames are linear in exposure above the black level, as a raw DAVIS
             frame is (the free curve is a straight line in ln(v - black)).
         cutoff_hz: the photoreceptor's cut-off frequency in bright light, or 0 when unknown.
+        dead_time_us: the shortest time between two events of a pixel that must fire many
+            times in a row (its refractory period), µs; 0 when unknown.
         response_value: ``(K,)`` increasing normalised frame values of the inverse response.
         response_log_exposure: ``(K,)`` ln(relative exposure) at those values, increasing.
         pixel_factor_on: ``(H, W)`` each pixel's ON threshold over ``threshold_on`` (median
@@ -72,6 +74,7 @@ class SensorCalibration:
     saturation: float = 1.0
     response_linear: bool = False
     cutoff_hz: float = 0.0
+    dead_time_us: int = 0
     response_value: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     response_log_exposure: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     pixel_factor_on: np.ndarray = dataclasses.field(default_factory=lambda: np.ones((0, 0)))
@@ -114,6 +117,11 @@ class SensorCalibration:
             f"{self.black_level:.3f}, clip at {self.saturation:.3f}, response "
             + ("linear" if self.response_linear else "not linear"),
         ]
+        if self.dead_time_us:
+            lines.append(
+                f"pixel dead time {self.dead_time_us / 1000:.2f} ms (at most "
+                f"{1e6 / self.dead_time_us:.0f} events per second from one pixel)"
+            )
         if self.pixel_factor_on.size:
             spread = np.std(np.concatenate([self.pixel_factor_on, self.pixel_factor_off], None))
             lines.append(f"pixel threshold spread {100 * spread:.1f} %")

@@ -111,7 +111,8 @@ class Truth:
         """What a perfect calibration would measure: the sensor's true values (white-box fits).
 
         The median pixel's thresholds with every pixel's factor, the events' true delay, the
-        photoreceptor's cut-off, the response's black and clip levels and its table.
+        photoreceptor's cut-off, the pixels' dead time, the response's black and clip levels
+        and its table.
 
         Raises:
             SessionError: this truth does not record its sensor (written by an older version).
@@ -131,6 +132,7 @@ class Truth:
             saturation=float(response.get("saturation", 1.0)),
             response_linear=response["family"] == "linear",
             cutoff_hz=float(self.sensor["dvs"]["cutoff_hz"]),
+            dead_time_us=int(self.sensor.get("dead_time_us", 0)),
             response_value=self.crf_value[clipped],
             response_log_exposure=self.crf_log_exposure[clipped],
             pixel_factor_on=(self.pixel_threshold_on / medians[0]).astype(np.float32),

@@ -18,7 +18,7 @@ HELP = (
     "LDR brackets, scores"
 )
 
-FLAGS = {"register_test_views": "--no-registration"}
+FLAGS = {"register_test_views": "--no-registration", "dead_time": "--no-dead-time"}
 """Option strings that differ from the ones derived from :class:`FitConfig`'s field names."""
 
 

@@ -96,6 +96,8 @@ class TrainingData:
         monochrome: the sensor has no colour filter: renders are luminance, one channel.
         threshold: the unit of ``bins``: the mean of the calibrated ON and OFF thresholds.
         cutoff_hz: the photoreceptor cut-off the calibration knows, or 0 (the config's then).
+        dead_time_s: the pixels' measured dead time, or 0 when none was measured.
+        polarity_scale: the calibrated ON and OFF thresholds over ``threshold``.
         linear_levels: ``(black, saturation)`` normalised, when the calibration measured frames
             linear in exposure (a raw DAVIS frame); None otherwise.
         test: held-out views with truth, if any.
@@ -115,6 +117,8 @@ class TrainingData:
     monochrome: bool = False
     threshold: float = 0.3
     cutoff_hz: float = 0.0
+    dead_time_s: float = 0.0
+    polarity_scale: tuple[float, float] = (1.0, 1.0)
     linear_levels: tuple[float, float] | None = None
     test: TestViews | None = None
     truth: TrainTruth | None = None

@@ -102,6 +102,11 @@ def load_training_data(
             monochrome=not session.color_filter.is_color,
             threshold=calibration.threshold,
             cutoff_hz=calibration.cutoff_hz,
+            dead_time_s=calibration.dead_time_us * 1e-6,
+            polarity_scale=(
+                calibration.threshold_on / calibration.threshold,
+                calibration.threshold_off / calibration.threshold,
+            ),
             linear_levels=(calibration.black_level, calibration.saturation)
             if calibration.response_linear
             else None,

@@ -45,6 +45,8 @@ class FitConfig:
             the field's log contrast).
         cutoff_hz: photoreceptor cut-off frequency of the delay filter, unless the sensor's
             values state it.
+        dead_time: limit the predicted events of a pixel to one per its measured dead time
+            (refractory period), the rest owed to later bins.
         event_share: fraction of each batch drawn among pixels with events.
         validation_share: fraction of training pixels held out for the progress PSNR.
         exposures_s: exposures of the rendered LDR brackets (empty: the truth's or the
@@ -75,6 +77,7 @@ class FitConfig:
     response: str = "auto"
     threshold: float = 0.0
     cutoff_hz: float = 150.0
+    dead_time: bool = True
     event_share: float = 0.5
     validation_share: float = 0.01
     exposures_s: tuple[float, ...] = ()
@@ -134,6 +137,7 @@ class FitConfig:
             "response",
             "threshold",
             "cutoff_hz",
+            "dead_time",
             "event_share",
             "batch_pixels",
             "subframes",

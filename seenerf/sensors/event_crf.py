@@ -1,4 +1,9 @@
-"""The event response (eqs. 9-12): filter channel, delay low-pass, counts = log change / Theta."""
+"""The event response (eqs. 9-12): filter channel, delay low-pass, counts = log change / Theta.
+
+Beyond the paper, a pixel's dead time: one that owes more events than its refractory period
+lets it fire within a bin fires what it can and owes the rest to the next bins
+(:func:`rate_limited`).
+"""
 
 from __future__ import annotations
 
@@ -18,6 +23,7 @@ __all__ = [
     "event_log_radiance",
     "low_pass",
     "predicted_counts",
+    "rate_limited",
     "v2e_intensity_factor",
 ]
 
@@ -68,6 +74,27 @@ def predicted_counts(filtered_log: torch.Tensor, threshold: float) -> torch.Tens
     return torch.diff(filtered_log, dim=1) / threshold
 
 
+def rate_limited(counts: torch.Tensor, cap_on: torch.Tensor, cap_off: torch.Tensor) -> torch.Tensor:
+    """Counts of pixels that fire at most ``cap`` events per bin and owe the rest to later bins.
+
+    Args:
+        counts: ``(R, b)`` signed counts the light change asks for, bin by bin.
+        cap_on: ``(R,)`` or ``()``: the most ON counts one bin can hold.
+        cap_off: the same for OFF counts (positive).
+
+    Returns:
+        ``(R, b)`` the counts fired; what is still owed after the last bin is not in them.
+    """
+    owed = torch.zeros_like(counts[:, 0])
+    fired = []
+    for index in range(counts.shape[1]):
+        owed = owed + counts[:, index]
+        now = torch.maximum(torch.minimum(owed, cap_on), -cap_off)
+        owed = owed - now
+        fired.append(now)
+    return torch.stack(fired, dim=1)
+
+
 def v2e_intensity_factor(log_exposure: torch.Tensor) -> torch.Tensor:
     """Fixed bandwidth factor of a v2e-style pixel: ``(x / (x + 1))^(1/2.2)``, x = radiance x s."""
     x = torch.exp(log_exposure.clamp(-_LOG_LIMIT, _LOG_LIMIT))
@@ -102,6 +129,9 @@ class EventCrf(nn.Module):
         threshold: contrast threshold Theta (default: the sessions' ``DEFAULT_THRESHOLD``).
         cutoff_hz: photoreceptor cut-off f_c; tau = 1 / (2 pi f_c).
         hidden: width of the delay MLP.
+        dead_time_s: a pixel's shortest interval between events; 0: no limit to its rate.
+        polarity_scale: the ON and OFF thresholds over ``threshold`` (a bin holds at most
+            ``bin / dead_time`` events, each of its polarity's threshold).
     """
 
     def __init__(
@@ -110,10 +140,14 @@ class EventCrf(nn.Module):
         threshold: float = DEFAULT_THRESHOLD,
         cutoff_hz: float = 150.0,
         hidden: int = 128,
+        dead_time_s: float = 0.0,
+        polarity_scale: tuple[float, float] = (1.0, 1.0),
     ):
         super().__init__()
         self.spec = spec
         self.threshold = threshold
+        self.dead_time_s = dead_time_s
+        self.polarity_scale = polarity_scale
         self.tau_s = 1.0 / (2 * math.pi * cutoff_hz)
         self.delay = nn.Sequential(
             nn.Linear(1, hidden), nn.ReLU(), nn.Linear(hidden, 1), nn.Sigmoid()
@@ -141,18 +175,25 @@ class EventCrf(nn.Module):
             exposure_s: ``(R,)`` exposure of the pixel's frame; a bin lasts exposure / b.
         """
         pixel = self.pixel_log_radiance(log_radiance, mix)
+        bin_s = (exposure_s / max(pixel.shape[1] - 1, 1))[:, None]
+        counts = predicted_counts(self.filtered(pixel, exposure_s, bin_s), self.threshold)
+        if self.dead_time_s <= 0:
+            return counts
+        most = bin_s[:, 0] / self.dead_time_s
+        return rate_limited(counts, most * self.polarity_scale[0], most * self.polarity_scale[1])
+
+    def filtered(
+        self, pixel: torch.Tensor, exposure_s: torch.Tensor, bin_s: torch.Tensor
+    ) -> torch.Tensor:
+        """``(R, P)`` the pixel's log radiance after the delay low-pass (unchanged with none)."""
         if self.spec.delay == "none":
-            return predicted_counts(pixel, self.threshold)
-        bins = pixel.shape[1] - 1
-        bin_s = (exposure_s / max(bins, 1))[:, None]
+            return pixel
         factor = DELAY_FACTORS[self.spec.delay](self, pixel, exposure_s)
         epsilon = factor * bin_s / self.tau_s
         if self.spec.domain == "linear":
             linear = torch.exp(pixel.clamp(-_LOG_LIMIT, _LOG_LIMIT))
-            filtered = torch.log(low_pass(linear, epsilon, self.spec.order).clamp(min=1e-30))
-        else:
-            filtered = low_pass(pixel, epsilon, self.spec.order)
-        return predicted_counts(filtered, self.threshold)
+            return torch.log(low_pass(linear, epsilon, self.spec.order).clamp(min=1e-30))
+        return low_pass(pixel, epsilon, self.spec.order)
 
 
 def _learned_factor(crf: EventCrf, pixel: torch.Tensor, exposure_s: torch.Tensor) -> torch.Tensor:

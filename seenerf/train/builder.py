@@ -139,6 +139,8 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
         event_args={
             "threshold": data.threshold,
             "cutoff_hz": data.cutoff_hz or config.cutoff_hz,
+            "dead_time_s": data.dead_time_s if config.dead_time else 0.0,
+            "polarity_scale": data.polarity_scale,
         },
     )
     return model.to(device), preset

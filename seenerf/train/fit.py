@@ -127,6 +127,9 @@ def resolved_settings(trainer: Trainer) -> dict:
         "space": "ndc" if renderer.space is not None else "world",
         "event_threshold": trainer.data.threshold,
         "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.cutoff_hz,
+        "event_dead_time_s": trainer.model.event_crf.dead_time_s
+        if trainer.model.event_crf is not None
+        else 0.0,
         "rgb_response": None if trainer.model.crf is None else type(trainer.model.crf).__name__,
     }
 

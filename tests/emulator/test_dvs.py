@@ -1,9 +1,12 @@
+import dataclasses
+
 import numpy as np
 import pytest
 
 from davis_io.colorfilter import filter_weights
 from davis_io.emulator.colorfilter import through_filter
 from davis_io.emulator.dvs import DVS_PRESETS, DvsParams, DvsPixels, intensity_factor, lin_log
+from davis_io.emulator.sensor import default_sensor
 from davis_io.errors import UsageError
 from davis_io.types import ColorFilter
 
@@ -167,3 +170,14 @@ def test_refractory_period_shorter_than_a_sub_step_is_inactive():
     pixels = DvsPixels(params, 1, 1, seed=0)
     pixels.step(radiance_for_log([[1.0]]), 0)
     assert pixels.step(radiance_for_log([[1.9]]), 2000)["t"].tolist() == [500, 1000, 1500, 2000]
+
+
+@pytest.mark.parametrize(("refractory_us", "dead_time_us"), [(0, 0), (975, 2000), (2500, 2500)])
+def test_the_truth_states_the_dead_time_a_backlogged_pixel_fires_at(refractory_us, dead_time_us):
+    # At 2 ms DVS steps a pixel held back by a 975 µs refractory period fires again only in a
+    # later step (see the refractory test above: candidates share the step's sub-steps).
+    sensor = default_sensor("clean", "reinhard_gamma", ColorFilter.MONO)
+    sensor = dataclasses.replace(
+        sensor, dvs=dataclasses.replace(sensor.dvs, refractory_us=refractory_us)
+    )
+    assert sensor.to_json(step_us=2000)["dead_time_us"] == dead_time_us

@@ -100,6 +100,7 @@ def test_fit_verb_keeps_its_option_names(tmp_path):
         + ["--steps", "7", "--device", "cpu", "--threshold", "0.35", "--subframes", "2"]
         + ["--bins", "6", "--low-pass", "paper", "--seed", "3", "--threads", "2"]
         + ["--no-registration", "--fresh", "--run", "mine", "--exposures", "0.01", "0.02"]
+        + ["--no-dead-time"]
     )
     config = FitConfig(**dataclass_values(FitConfig, args))
     assert config == FitConfig(
@@ -116,5 +117,6 @@ def test_fit_verb_keeps_its_option_names(tmp_path):
         threads=2,
         register_test_views=False,
         exposures_s=(0.01, 0.02),
+        dead_time=False,
     )
     assert (args.fresh, args.run) == (True, "mine")

@@ -11,6 +11,7 @@ from seenerf.sensors.event_crf import (
     event_log_radiance,
     low_pass,
     predicted_counts,
+    rate_limited,
     v2e_intensity_factor,
 )
 from seenerf.sensors.exposure import blur_log_radiance
@@ -123,6 +124,41 @@ def test_predicted_counts_from_known_sequence():
     # (0.5 - 0) / 0.3 = 1.6667, (0.75 - 0.5) / 0.3 = 0.8333
     counts = predicted_counts(torch.tensor([[0.0, 0.5, 0.75]]), 0.3)
     assert counts[0].tolist() == pytest.approx([5 / 3, 5 / 6])
+
+
+def test_rate_limited_pixels_fire_their_cap_and_owe_the_rest_by_hand():
+    # Cap 3 ON, 2 OFF per bin. Owed 5 -> fire 3, owe 2; +5 -> 7: fire 3, owe 4; +0: fire 3, owe
+    # 1; -3 -> -2: fire -2, owe 0. A pixel under its cap fires what it is asked.
+    counts = torch.tensor([[5.0, 5.0, 0.0, -3.0], [1.0, -1.5, 2.0, 0.0]], requires_grad=True)
+    fired = rate_limited(counts, torch.tensor(3.0), torch.tensor(2.0))
+    assert fired.tolist() == [[3.0, 3.0, 3.0, -2.0], [1.0, -1.5, 2.0, 0.0]]
+    # What was owed at the end (a count still owed after the last bin) is not fired.
+    three = torch.tensor(3.0)
+    assert rate_limited(torch.tensor([[9.0, 0.0]]), three, three).tolist() == [[3.0, 3.0]]
+    # A bin under its cap fires what it is asked and what is owed: 5 -> 3 (owe 2), 0.5 -> 2.5;
+    # its count depends on the earlier request, a capped bin's on no request.
+    asked = torch.tensor([[5.0, 0.5, 0.0]], requires_grad=True)
+    fired = rate_limited(asked, three, three)
+    assert fired.tolist() == [[3.0, 2.5, 0.0]]
+    fired[0, 1].backward()
+    assert asked.grad.tolist() == [[1.0, 1.0, 0.0]]
+    asked.grad = None
+    fired = rate_limited(asked, three, three)
+    fired[0, 0].backward()
+    assert asked.grad.tolist() == [[0.0, 0.0, 0.0]]
+
+
+def test_event_crf_with_a_dead_time_caps_each_bin_by_polarity():
+    # No delay; exposure 4 ms, b = 2 -> 2 ms bins; dead time 1 ms -> 2 events per bin, in units
+    # of the mean threshold 0.3: ON threshold 0.45 (scale 1.5) -> cap 3, OFF 0.15 -> cap 1.
+    spec = EventModelSpec(delay="none")
+    crf = EventCrf(spec, threshold=0.3, dead_time_s=1e-3, polarity_scale=(1.5, 0.5))
+    log_e = torch.tensor([[[0.0] * 3, [1.5] * 3, [1.5] * 3], [[0.0] * 3, [-0.6] * 3, [-0.6] * 3]])
+    counts = crf(log_e, torch.tensor([[0.0, 1.0, 0.0]] * 2), torch.tensor([4e-3, 4e-3]))
+    # asked 5, 0 -> fired 3, 2; asked -2, 0 -> fired -1, -1
+    assert counts.tolist() == [pytest.approx([3.0, 2.0]), pytest.approx([-1.0, -1.0])]
+    free = EventCrf(spec, threshold=0.3)(log_e, torch.tensor([[0.0, 1.0, 0.0]] * 2), torch.ones(2))
+    assert free.tolist() == [pytest.approx([5.0, 0.0]), pytest.approx([-2.0, 0.0])]
 
 
 def test_event_pixel_sees_its_bayer_channel_or_luminance():
