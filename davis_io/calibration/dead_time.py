@@ -25,7 +25,7 @@ def dead_time_us(times_us: np.ndarray, x: np.ndarray, y: np.ndarray, width: int)
     """The :data:`DEAD_TIME_PERCENTILE` of the intervals between consecutive events of a pixel.
 
     Args:
-        times_us: ``(N,)`` event times, µs.
+        times_us: ``(N,)`` event times, µs, in order (as a camera sends them).
         x: ``(N,)`` event columns.
         y: ``(N,)`` event rows.
         width: sensor width (pixels are keyed ``y * width + x``).
@@ -35,7 +35,7 @@ def dead_time_us(times_us: np.ndarray, x: np.ndarray, y: np.ndarray, width: int)
     """
     count = min(len(times_us), MAX_EVENTS)
     pixel = y[:count].astype(np.int64) * width + x[:count]
-    order = np.lexsort((times_us[:count], pixel))
+    order = np.argsort(pixel, kind="stable")  # each pixel's events stay in time order
     pixel, times = pixel[order], np.asarray(times_us[:count], np.int64)[order]
     intervals = np.diff(times)[pixel[1:] == pixel[:-1]]
     if len(intervals) == 0:
