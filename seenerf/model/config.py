@@ -33,7 +33,8 @@ class FitConfig:
         bins: event bins per exposure b; 0 uses the session's.
         low_pass: reading of the delay filter: ``reference`` (first order on log radiance) or
             ``paper`` (second order on linear radiance).
-        event_weight: lambda of eq. 15.
+        event_weight: lambda of eq. 15, the event loss's weight (0: the preset's; the
+            published 0.005 for ``paper``, 0.001 for ``fast`` and ``balanced``).
         anchor_weight: weight of the CRF anchor term.
         anchor_log_exposure: ln(radiance x s) of the CRF anchor point.
         anchor_value: LDR value of the CRF at the anchor point.
@@ -70,7 +71,7 @@ class FitConfig:
     seed: int = 0
     bins: int = 0
     low_pass: str = "reference"
-    event_weight: float = 0.005
+    event_weight: float = 0.0
     anchor_weight: float = 0.5
     anchor_log_exposure: float = 0.0
     anchor_value: float = 0.5
@@ -118,6 +119,8 @@ class FitConfig:
             )
         if not 0 <= self.event_share <= 1 or not 0 <= self.validation_share < 0.5:
             raise ConfigError("event_share must be in [0, 1] and validation_share in [0, 0.5)")
+        if self.event_weight < 0:
+            raise ConfigError(f"event_weight {self.event_weight} is negative (0: the preset's)")
         if self.threshold < 0 or self.cutoff_hz <= 0:
             raise ConfigError("threshold must be >= 0 (0: measured) and cutoff_hz > 0")
         return self

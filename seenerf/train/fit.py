@@ -125,6 +125,7 @@ def resolved_settings(trainer: Trainer) -> dict:
         "bins": trainer.data.num_bins,
         "box": {"low": renderer.box.low, "high": renderer.box.high},
         "space": "ndc" if renderer.space is not None else "world",
+        "event_weight": trainer.preset.event_weight,
         "event_threshold": trainer.data.threshold,
         "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.cutoff_hz,
         "event_dead_time_s": trainer.model.event_crf.dead_time_s

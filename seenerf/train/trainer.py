@@ -118,6 +118,7 @@ class Trainer:
             preset,
             pixels_per_step=config.batch_pixels or preset.pixels_per_step,
             warm_steps=preset.warm_steps if config.warm_steps < 0 else config.warm_steps,
+            event_weight=config.event_weight or preset.event_weight,
         )
         self.generator = torch.Generator().manual_seed(config.seed)
         # A budget alone runs until it is spent or the held-out score stops rising (a plateau),
@@ -126,7 +127,7 @@ class Trainer:
         self.total_steps = config.steps or (math.inf if budgeted else self.preset.steps)
         self.spent_s = spent_s
         self.weights = LossWeights(
-            config.event_weight, config.anchor_weight, self.preset.smoothness
+            self.preset.event_weight, config.anchor_weight, self.preset.smoothness
         )
         self._make_samplers()
         field_params = list(self.model.renderer.parameters())

@@ -50,6 +50,18 @@ def test_every_variant_trains_a_few_steps(variant, tiny_scene):
     assert _parameters_changed(trainer, before)
 
 
+@pytest.mark.parametrize(
+    ("preset", "stated", "used"),
+    [("fast", 0.0, 0.001), ("balanced", 0.0, 0.001), ("paper", 0.0, 0.005), ("fast", 0.02, 0.02)],
+)
+def test_the_event_weight_is_the_presets_unless_one_is_stated(preset, stated, used, tiny_scene):
+    config = _config(preset=preset, event_weight=stated)
+    trainer = Trainer(tiny_scene, config, log=lambda line: None)
+    assert trainer.weights.events == used
+    with pytest.raises(ConfigError, match="event_weight -0.1 is negative"):
+        FitConfig(event_weight=-0.1).validate()
+
+
 def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked():
     from seenerf.sensors.rgb_crf import LinearCrf, PowerCrf, RgbCrf
 
