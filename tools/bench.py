@@ -38,7 +38,7 @@ from pathlib import Path
 
 from benchlib.capture import CAPTURE_BENCHES, run_capture_bench
 from benchlib.fits import run_ladder, run_speed_probe
-from benchlib.machine import describe_machine, exact_command
+from benchlib.machine import describe_machine, exact_command, source_commit
 from benchlib.plan import make_plan, planned_rungs, planned_training_s
 from benchlib.plot import speed_error_figure, write_png
 from benchlib.poses_step import POSE_SOURCES, resolve_pose_source
@@ -222,6 +222,7 @@ def main(argv: list[str] | None = None, command: str | None = None) -> int:
         datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
         plan,
         resolve_pose_source(args.poses, args.quick),
+        source_commit(),
     )
     print(f"command: {report.command}\nmachine: {report.machine.line()}")
     print(

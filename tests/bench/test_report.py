@@ -29,6 +29,7 @@ def report_with(rows):
         "2026-01-01 00:00 UTC",
         plan,
         "truth",
+        commit="0123456789abcdef",
         wall_s=600.0,
         rows=rows,
     )
@@ -79,12 +80,14 @@ def test_empty_report_renders_with_nothing_measured(tmp_path):
     text = render_markdown(report)
     assert text.startswith("## Speed against error\n")
     assert "Machine: Test CPU, 2 cores" in text
+    assert "(quick mode) at commit 0123456789ab, started 2026-01-01 00:00 UTC" in text
     assert text.count("**Paper's ordering here: not measured.**") == 5
     assert "Not measured (the main session was not ready)." in text
     assert all(check[-1] == "not measured" for check in target_checks(report))
     write_json(report, tmp_path / "results.json")
     saved = json.loads((tmp_path / "results.json").read_text())
     assert saved["rows"] == [] and saved["plan"]["quick"] is True
+    assert saved["commit"] == "0123456789abcdef"
     assert [v["summary"] for v in saved["verdicts"]] == ["not measured"] * 5
     assert len(saved["targets"]) == 7
 

@@ -49,6 +49,7 @@ class BenchReport:
     started_utc: str
     plan: Plan
     poses: str
+    commit: str = "unknown"
     wall_s: float = math.nan
     sessions: list[SessionOutcome] = field(default_factory=list)
     rows: list[RunRow] = field(default_factory=list)
@@ -328,8 +329,9 @@ def render_markdown(report: BenchReport) -> str:
     lines = [
         "## Speed against error",
         "",
-        f"Command: `{report.command}` ({'quick' if plan.quick else 'full'} mode), started "
-        f"{report.started_utc}, {report.wall_s / 60:.1f} min wall in total.",
+        f"Command: `{report.command}` ({'quick' if plan.quick else 'full'} mode) at commit "
+        f"{report.commit[:12]}, started {report.started_utc}, {report.wall_s / 60:.1f} min wall "
+        "in total.",
         "",
         f"Machine: {report.machine.line()}.",
         "",
