@@ -165,8 +165,8 @@ def register_test_poses(
     """Each held-out pose refined against its LDR image at the exposure nearest the training one.
 
     Returns:
-        The refined ``(V, 4, 4)`` poses and a summary: the exposure used, how far the poses
-        turned (median and largest, degrees) and the seconds per view.
+        The refined ``(V, 4, 4)`` poses and a summary: the exposure used, how far each pose
+        turned (degrees: every view's, the median and the largest) and the seconds per view.
     """
     exposures = np.asarray(data.test.exposures_s, np.float64)
     index = int(np.argmin(np.abs(np.log(exposures / model.reference_exposure_s))))
@@ -188,6 +188,7 @@ def register_test_poses(
     return refined, {
         "registered": True,
         "exposure_s": float(exposures[index]),
+        "turned_deg": [float(angle) for angle in turned],
         "turned_deg_median": float(np.median(turned)),
         "turned_deg_max": float(np.max(turned)),
         "s_per_view": (time.perf_counter() - start) / max(len(c2w), 1),

@@ -3,6 +3,7 @@ import math
 
 from benchlib.fits import SpeedProbe
 from benchlib.machine import Machine
+from benchlib.numbers import DASH
 from benchlib.plan import make_plan
 from benchlib.report import (
     BenchReport,
@@ -141,7 +142,15 @@ def test_oracle_beside_full_is_read_at_the_top_budget():
 
 def test_scene_rows_judge_each_scene_at_the_top_budget():
     rows = [
-        scene_run("room", "full", 33.0, 30.5, registered_hdr_psnr=25.0, crf_rms=0.021),
+        scene_run(
+            "room",
+            "full",
+            33.0,
+            30.5,
+            registered_hdr_psnr=25.0,
+            crf_rms=0.021,
+            test_pose_turn_deg=[0.5, 0.25, 1.5],
+        ),
         scene_run("room", "oracle", 34.5, 33.0),
         scene_run("lamp", "full", 31.0, 29.5),
         scene_run("lamp", "oracle", 32.0, 31.0),
@@ -158,8 +167,10 @@ def test_scene_rows_judge_each_scene_at_the_top_budget():
     table = {row[0]: row for row in scene_rows(report)}
     assert list(table) == ["room", "lamp", "corridor", "lamp-film"]
     room = table["room"]
-    assert room[1:8] == ["33.00", "30.50", "34.50", "33.00", "1.50", "25.00", "0.021"]
-    assert room[8:10] == ["0.60", "0.014"] and room[-1] == "met"
+    assert room[1:7] == ["33.00", "30.50", "34.50", "33.00", "1.50", "25.00"]
+    assert room[7:9] == ["0.50 / 1.50", "0.021"]  # the turns' median and largest
+    assert room[9:11] == ["0.60", "0.014"] and room[-1] == "met"
+    assert table["lamp"][7] == DASH  # not registered
     assert table["lamp"][-1] == "**missed**"  # novel exposure 29.5 < 30
     assert table["corridor"][5] == "3.50" and table["corridor"][-1] == "**missed**"  # gap > 3
     assert table["lamp-film"][-1] == "fit failed"

@@ -40,12 +40,15 @@ def test_row_reads_the_registered_extra_scores_and_the_crf_error():
         **METRICS,
         "test_poses": {
             "registered": True,
+            "turned_deg": [0.25, 1.5],
             "registered_scores": {"hdr_psnr": 22.5, "novel_exposure_psnr": 20.25},
         },
         "crf_error": {"rms": [0.01, None, 0.03], "max": [0.1, None, 0.2]},
     }
     row = row_from_metrics(RunRow("room", "fast", "full", 600.0), metrics)
     assert (row.registered_hdr_psnr, row.registered_novel_psnr) == (22.5, 20.25)
+    assert row.test_pose_turn_deg == [0.25, 1.5]
     assert row.crf_rms == 0.03  # the worst channel; a channel with no comparison is left out
     plain = row_from_metrics(RunRow("room", "fast", "oracle", 600.0), METRICS)
     assert math.isnan(plain.registered_hdr_psnr) and math.isnan(plain.crf_rms)
+    assert plain.test_pose_turn_deg == []

@@ -6,13 +6,14 @@ import dataclasses
 import json
 import math
 import os
+import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from benchlib.capture import CaptureResult
 from benchlib.fits import SpeedProbe
 from benchlib.machine import Machine
-from benchlib.numbers import fmt
+from benchlib.numbers import DASH, fmt
 from benchlib.paper import COMPARISONS
 from benchlib.plan import METHOD, TABLE4_ROWS, Plan
 from benchlib.results import RunRow
@@ -191,6 +192,13 @@ def target_checks(report: BenchReport) -> list[list[str]]:
     return checks
 
 
+def _turn(angles: list[float]) -> str:
+    """``median / max`` of the held-out poses' registration turns, degrees, or ``-``."""
+    if not angles:
+        return DASH
+    return f"{fmt(statistics.median(angles))} / {fmt(max(angles))}"
+
+
 def scene_rows(report: BenchReport) -> list[list[str]]:
     """Per scene at the top budget: ``full`` and ``oracle``, their gap, and what it is made of.
 
@@ -221,6 +229,7 @@ def scene_rows(report: BenchReport) -> list[list[str]]:
                 fmt(oracle.novel_psnr if oracle else None),
                 fmt(gap),
                 fmt(full.registered_hdr_psnr if ok else None),
+                _turn(full.test_pose_turn_deg if ok else []),
                 fmt(full.crf_rms if ok else None, 3),
                 fmt(outcome.rotation_error_deg if outcome else None),
                 fmt(outcome.centre_error if outcome else None, 3),
@@ -239,6 +248,7 @@ SCENE_HEADERS = [
     "oracle novel",
     "oracle − full HDR",
     "full HDR, registered (extra)",
+    "test poses turned by registering, median / max °",
     "CRF RMS",
     "rotation error °",
     "centre error / extent",

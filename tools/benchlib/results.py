@@ -55,6 +55,9 @@ class RunRow:
         registered_hdr_psnr: HDR PSNR with each held-out pose refined against its own test
             image, dB (an extra column; NaN when not registered).
         registered_novel_psnr: novel-exposure PSNR likewise, dB.
+        test_pose_turn_deg: how far registering each held-out view turned its mapped pose,
+            degrees (the mapped poses' rotation error as the fitted scene sees it; empty when
+            not registered).
         crf_rms: the learned response's RMS difference from the true one, worst channel.
         last_terms: the loss terms of the last progress record.
         render_s_per_view: seconds to render one test view.
@@ -82,6 +85,7 @@ class RunRow:
     fit_psnr: float = NAN
     registered_hdr_psnr: float = NAN
     registered_novel_psnr: float = NAN
+    test_pose_turn_deg: list[float] = field(default_factory=list)
     crf_rms: float = NAN
     last_terms: dict[str, float] = field(default_factory=dict)
     render_s_per_view: float = NAN
@@ -128,7 +132,9 @@ def row_from_metrics(row: RunRow, metrics: dict) -> RunRow:
     row.hdr_unaligned_psnr = _score(metrics, "hdr_unaligned", "psnr")
     row.novel_psnr = _score(metrics, "novel_exposure", "psnr")
     row.novel_ssim = _score(metrics, "novel_exposure", "ssim")
-    registered = metrics.get("test_poses", {}).get("registered_scores", {})
+    test_poses = metrics.get("test_poses", {})
+    registered = test_poses.get("registered_scores", {})
+    row.test_pose_turn_deg = [float(angle) for angle in test_poses.get("turned_deg", [])]
     row.registered_hdr_psnr = _number(registered.get("hdr_psnr"))
     row.registered_novel_psnr = _number(registered.get("novel_exposure_psnr"))
     crf = metrics.get("crf_error") or {}
