@@ -6,6 +6,7 @@ One command regenerates every number of the report:
                           [--presets fast ...] [--variants full ...] [--budgets 60 180 ...]
                           [--table-budget S] [--table4 | --no-table4] [--scenes | --no-scenes]
                           [--no-capture] [--fresh] [--threads N] [--ray ADDRESS] [--publish]
+                          [--render-only]
 
 1. Sessions: the ``room`` benchmark of ``make_benchmark.py``, the Table 4 sessions (input
    exposure x1/16, x1, x16 of 0.016 s at a fixed gain; DVS noise x1, x2, x4) and the other four
@@ -20,10 +21,11 @@ One command regenerates every number of the report:
 
 Writes ``OUT/report.md`` (a section for BENCHMARKS.md), ``OUT/results.json`` and
 ``OUT/speed_vs_error.png``; the report is rewritten after every run, so an interrupted benchmark
-leaves a partial one. Rerunning the same command resumes: every rung whose metrics are kept
-under ``OUT/runs/`` (and whose checkpoint is still there) is read back, not trained, and the
-report counts them; ``--fresh`` trains every rung again (sessions are still reused: delete
-``OUT/sessions/`` to make them again). ``--publish`` (full mode) then splices the report into
+leaves a partial one (``--render-only`` writes it again from ``OUT/results.json``). Rerunning
+the same command resumes: every rung whose metrics are kept under ``OUT/runs/`` (and whose
+checkpoint is still there) is read back, not trained, and the report counts them; ``--fresh``
+trains every rung again (sessions are still reused: delete ``OUT/sessions/`` to make them
+again). ``--publish`` (full mode) then splices the report into
 BENCHMARKS.md between its markers and copies the plot and JSON to ``bench-results/``.
 """
 
@@ -43,6 +45,7 @@ from benchlib.plan import make_plan, planned_rungs, planned_training_s
 from benchlib.plot import speed_error_figure, write_png
 from benchlib.poses_step import POSE_SOURCES, resolve_pose_source
 from benchlib.publish import publish
+from benchlib.readback import StaleResults, report_from_json
 from benchlib.report import BenchReport, render_markdown, write_json
 from benchlib.results import RunRow
 from benchlib.sessions import prepare_session
@@ -115,6 +118,12 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
         metavar="local|auto|ADDRESS",
         help="train every rung as a Ray task, the ladders side by side, one CPU each "
         "('local': Ray on this machine; the output folder must be on storage every node sees)",
+    )
+    parser.add_argument(
+        "--render-only",
+        action="store_true",
+        help="measure nothing: write the report (and with --publish, BENCHMARKS.md) again from "
+        "OUT/results.json, e.g. after a change to how it is written",
     )
     parser.add_argument(
         "--publish",
@@ -199,9 +208,26 @@ def _exit_on_sigterm(signum: int, frame) -> None:
     raise SystemExit(128 + signum)
 
 
+def render_again(out: Path, publish_it: bool) -> int:
+    """Write ``out``'s report (and publish it) from its ``results.json``; 0, or 1 if stale."""
+    try:
+        report = report_from_json(out / "results.json")
+    except (OSError, StaleResults) as error:
+        print(f"bench.py: {error}", file=sys.stderr)
+        return 1
+    write_outputs(report, out)
+    print(f"report: {out / 'report.md'} (from {out / 'results.json'})")
+    if publish_it:
+        folder = publish(report, out, TOOLS_DIR.parent / "BENCHMARKS.md")
+        print(f"published: BENCHMARKS.md, {folder}")
+    return 0
+
+
 def main(argv: list[str] | None = None, command: str | None = None) -> int:
     """Run the benchmark; return 0 when every session and run succeeded, else 1."""
     args = parse_arguments(argv)
+    if args.render_only:
+        return render_again(args.out.resolve(), args.publish)
     signal.signal(signal.SIGTERM, _exit_on_sigterm)  # so a running child is killed with us
     started = time.monotonic()
     plan = make_plan(

@@ -4,7 +4,7 @@ import pytest
 from benchlib.machine import Machine
 from benchlib.plan import make_plan
 from benchlib.publish import BEGIN, END, RESULTS_FOLDER, publish, splice
-from benchlib.report import BenchReport, write_json
+from benchlib.report import BenchReport, render_markdown, write_json
 from benchlib.results import RunRow
 from benchlib.sessions import SessionOutcome
 
@@ -63,3 +63,18 @@ def test_json_paths_under_the_working_folder_are_relative(tmp_path, monkeypatch)
     text = (tmp_path / "results.json").read_text()
     assert str(tmp_path) not in text
     assert json.loads(text)["sessions"][0]["folder"] == "sessions/room"
+
+
+def test_render_only_writes_the_report_again_from_results_json(tmp_path, capsys):
+    import bench
+
+    report = full_run_report()
+    write_json(report, tmp_path / "results.json")
+    assert bench.main(["--out", str(tmp_path), "--render-only"]) == 0
+    assert (tmp_path / "report.md").read_text() == render_markdown(report)
+    assert (tmp_path / report.plot_name).stat().st_size > 0
+    payload = json.loads((tmp_path / "results.json").read_text())
+    payload["rows"][0]["mapped_hdr_psnr"] = 24.0  # a field this version does not write
+    (tmp_path / "results.json").write_text(json.dumps(payload))
+    assert bench.main(["--out", str(tmp_path), "--render-only"]) == 1
+    assert "RunRow has no field mapped_hdr_psnr" in capsys.readouterr().err

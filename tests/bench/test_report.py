@@ -1,10 +1,13 @@
 import json
 import math
 
+import pytest
+from benchlib.capture import CAPTURE_BENCHES, CaptureResult
 from benchlib.fits import SpeedProbe
 from benchlib.machine import Machine
 from benchlib.numbers import DASH
 from benchlib.plan import make_plan
+from benchlib.readback import StaleResults, report_from_json
 from benchlib.report import (
     BenchReport,
     judge_all,
@@ -15,7 +18,7 @@ from benchlib.report import (
     tie_limit,
     write_json,
 )
-from benchlib.results import RunRow
+from benchlib.results import ProcessUsage, RunRow
 from benchlib.sessions import SessionOutcome
 from benchlib.verdicts import TIE_DB
 
@@ -205,3 +208,46 @@ def test_without_seed_runs_the_fixed_tie_limit_applies():
     report = full_report([scene_run("room", "full", 31.6, 28.5, budget=180.0)])
     assert tie_limit(report) == TIE_DB
     assert "the seed spread was not measured" in render_markdown(report)
+
+
+def _measured_report(tmp_path):
+    usage = ProcessUsage(0, 700.5, 1300.25, 1500.0)
+    rows = [
+        scene_run("room", "full", 33.0, 30.5, process=usage, test_pose_turn_deg=[0.5, 1.5]),
+        scene_run("room", "oracle", 34.5, 33.0, ldr_psnr=[(0.01, 30.0), (0.16, 31.5)]),
+        scene_run("lamp", "full", math.nan, math.nan, status="fit failed"),
+        scene_run("room", "full", 31.3, 28.2, budget=180.0, seed=2, last_terms={"ldr": 0.01}),
+    ]
+    report = full_report(rows)
+    report.sessions = [SessionOutcome(report.plan.sessions[0], tmp_path / "room", frames=16)]
+    report.speed = SpeedProbe({"fast": 1e4, "paper": 50.0, "fast_over_paper": 200.0}, usage)
+    bench = CAPTURE_BENCHES[0]
+    report.capture = [CaptureResult(bench, ["python", bench.tool], usage, {"ratio": 1.05})]
+    return report
+
+
+def test_a_results_file_reads_back_into_the_report_it_was_written_from(tmp_path):
+    report = _measured_report(tmp_path)
+    write_json(report, tmp_path / "results.json")
+    read = report_from_json(tmp_path / "results.json")
+    assert render_markdown(read) == render_markdown(report)
+    assert read.plan == report.plan and read.machine == MACHINE and read.speed == report.speed
+    assert read.rows[0].process == ProcessUsage(0, 700.5, 1300.25, 1500.0)
+    assert read.rows[1].ldr_psnr == [(0.01, 30.0), (0.16, 31.5)]
+    assert math.isnan(read.rows[2].hdr_psnr) and read.rows[2].status == "fit failed"
+    assert read.sessions[0].folder == tmp_path / "room"
+    assert read.capture[0].bench == CAPTURE_BENCHES[0]
+
+
+def test_a_results_file_of_another_version_names_the_field_and_what_to_do(tmp_path):
+    write_json(_measured_report(tmp_path), tmp_path / "results.json")
+    payload = json.loads((tmp_path / "results.json").read_text())
+    payload["rows"][1]["mapped_hdr_psnr"] = 24.0
+    (tmp_path / "old.json").write_text(json.dumps(payload))
+    unknown = r"old\.json\.rows\[1\]: RunRow has no field mapped_hdr_psnr.*make bench"
+    with pytest.raises(StaleResults, match=unknown):
+        report_from_json(tmp_path / "old.json")
+    del payload["rows"][1]["mapped_hdr_psnr"], payload["rows"][1]["variant"]
+    (tmp_path / "old.json").write_text(json.dumps(payload))
+    with pytest.raises(StaleResults, match=r"rows\[1\]: RunRow needs variant"):
+        report_from_json(tmp_path / "old.json")
