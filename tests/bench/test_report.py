@@ -251,3 +251,39 @@ def test_a_results_file_of_another_version_names_the_field_and_what_to_do(tmp_pa
     (tmp_path / "old.json").write_text(json.dumps(payload))
     with pytest.raises(StaleResults, match=r"rows\[1\]: RunRow needs variant"):
         report_from_json(tmp_path / "old.json")
+
+
+def test_every_scene_and_every_capture_figure_has_its_target_checked(tmp_path):
+    usage = ProcessUsage(0, 250.0, 400.0, 900.0)
+    rows = [
+        scene_run("room", "full", 26.0, 25.0, budget=180.0, process=usage),
+        scene_run("room", "full", 33.0, 30.5, process=usage),  # resumed: both processes count
+        scene_run("room", "oracle", 34.5, 33.0),
+        scene_run("lamp", "full", 29.99, 31.0, process=usage),
+        scene_run("lamp", "full", 35.0, 35.0, seed=1, process=usage),  # another seed: not counted
+    ]
+    report = full_report(rows)
+    specs = {spec.key: spec for spec in report.plan.sessions}
+    report.sessions = [
+        SessionOutcome(specs["room"], tmp_path, poses_s=90.0),
+        SessionOutcome(specs["lamp"], tmp_path, poses_s=130.0),
+    ]
+    decode, usb = CAPTURE_BENCHES[0], CAPTURE_BENCHES[1]
+    report.capture = [
+        CaptureResult(decode, [], figures={"ratio": 0.98}),
+        CaptureResult(usb, [], figures={"decoder_mwords_s": 86.0}),  # its overflow not measured
+    ]
+    checks = {c[0]: c[1:] for c in target_checks(report)}
+    assert checks["room: full HDR PSNR dB"] == ["33.00", ">= 30", "met"]
+    assert checks["room: oracle − full HDR PSNR dB"] == ["1.50", "<= 3", "met"]
+    assert checks["room: poses from the recording, s"] == ["90.00", "<= 120", "met"]
+    end_to_end = next(v for k, v in checks.items() if k.startswith("room: end to end"))
+    assert end_to_end == ["9.83", "<= 10", "met"]  # (90 + 250 + 250) / 60
+    assert checks["lamp: full HDR PSNR dB"] == ["29.99", ">= 30", "**missed**"]
+    assert checks["lamp: full novel-exposure PSNR dB"] == ["31.00", ">= 30", "met"]
+    assert checks["lamp: oracle − full HDR PSNR dB"] == [DASH, "<= 3", "not measured"]
+    assert checks["lamp: poses from the recording, s"] == ["130.00", "<= 120", "**missed**"]
+    assert checks["bench_decode.py: ours / dv-processing"] == ["0.98", ">= 1", "**missed**"]
+    assert checks["bench_usb.py: word decoder, M words/s"] == ["86.00", ">= 50", "met"]
+    overflow = "bench_usb.py: end to end, host queue overflow, packets"
+    assert checks[overflow] == [DASH, "== 0", "not measured"]
