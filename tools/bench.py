@@ -19,14 +19,15 @@ One command regenerates every number of the report:
 3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here.
 4. Capture side: ``bench_decode.py``, ``bench_usb.py`` and ``bench_record.py``.
 
-Writes ``OUT/report.md`` (a section for BENCHMARKS.md), ``OUT/results.json`` and
-``OUT/speed_vs_error.png``; the report is rewritten after every run, so an interrupted benchmark
-leaves a partial one (``--render-only`` writes it again from ``OUT/results.json``). Rerunning
-the same command resumes: every rung whose metrics are kept under ``OUT/runs/`` (and whose
-checkpoint is still there) is read back, not trained, and the report counts them; ``--fresh``
-trains every rung again (sessions are still reused: delete ``OUT/sessions/`` to make them
-again). ``--publish`` (full mode) then splices the report into
-BENCHMARKS.md between its markers and copies the plot and JSON to ``bench-results/``.
+Writes ``OUT/report.md`` (a section for BENCHMARKS.md), ``OUT/results.json``,
+``OUT/speed_vs_error.png`` and each scene's side-by-side views ``OUT/scenes/SESSION.png``; the
+report is rewritten after every run, so an interrupted benchmark leaves a partial one
+(``--render-only`` writes it again from ``OUT/results.json``). Rerunning the same command
+resumes: every rung whose metrics are kept under ``OUT/runs/`` (and whose checkpoint is still
+there) is read back, not trained, and the report counts them; ``--fresh`` trains every rung
+again (sessions are still reused: delete ``OUT/sessions/`` to make them again). ``--publish``
+(full mode) then splices the report into BENCHMARKS.md between its markers and copies the plot,
+the scene images and the JSON to ``bench-results/``.
 """
 
 from __future__ import annotations
@@ -46,8 +47,9 @@ from benchlib.plot import speed_error_figure, write_png
 from benchlib.poses_step import POSE_SOURCES, resolve_pose_source
 from benchlib.publish import publish
 from benchlib.readback import StaleResults, report_from_json
-from benchlib.report import BenchReport, render_markdown, write_json
+from benchlib.report import BenchReport, render_markdown, scene_sessions, write_json
 from benchlib.results import RunRow
+from benchlib.scene_images import write_scene_images
 from benchlib.sessions import prepare_session
 
 from seenerf.model.presets import PRESETS
@@ -140,6 +142,7 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
 def write_outputs(report: BenchReport, out: Path) -> None:
     """Rewrite ``report.md``, ``results.json`` and the plot from what is measured so far."""
     write_png(out / report.plot_name, speed_error_figure(report.rows, report.plan.sessions[0].key))
+    write_scene_images(scene_sessions(report), report.plan.table_preset, out)
     (out / "report.md").write_text(render_markdown(report))
     write_json(report, out / "results.json")
 

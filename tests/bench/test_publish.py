@@ -37,9 +37,11 @@ def test_splice_refuses_a_document_without_one_ordered_pair_of_markers(document)
 
 def test_publish_links_the_copied_plot_and_keeps_the_hand_written_text(tmp_path):
     out = tmp_path / "bench-out"
-    out.mkdir()
-    report = full_run_report()
+    (out / "scenes").mkdir(parents=True)
+    spec = make_plan(False, ("fast",), ("full",)).sessions[0]
+    report = full_run_report([SessionOutcome(spec, out / "sessions" / "room")])
     (out / report.plot_name).write_bytes(b"png bytes")
+    (out / "scenes" / "room.png").write_bytes(b"room views")
     write_json(report, out / "results.json")
     document = tmp_path / "BENCHMARKS.md"
     document.write_text(f"# Benchmarks\n\n{BEGIN}\n{END}\n\n## Analysis\n")
@@ -48,9 +50,11 @@ def test_publish_links_the_copied_plot_and_keeps_the_hand_written_text(tmp_path)
 
     assert folder == tmp_path / RESULTS_FOLDER
     assert (folder / report.plot_name).read_bytes() == b"png bytes"
+    assert (folder / "scenes" / "room.png").read_bytes() == b"room views"
     assert json.loads((folder / "results.json").read_text())["rows"][0]["hdr_psnr"] == 31.0
     text = document.read_text()
     assert f"![speed against error]({RESULTS_FOLDER}/{report.plot_name})" in text
+    assert f"![room: truth, full, oracle, error]({RESULTS_FOLDER}/scenes/room.png)" in text
     assert text.startswith("# Benchmarks\n") and text.endswith(f"{END}\n\n## Analysis\n")
     assert "| room | fast | full |" in text
 

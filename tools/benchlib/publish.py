@@ -7,6 +7,7 @@ import shutil
 from pathlib import Path
 
 from benchlib.report import BenchReport, render_markdown
+from benchlib.scene_images import IMAGES_FOLDER
 
 __all__ = [
     "BEGIN",
@@ -57,7 +58,8 @@ def splice(document: str, section: str, begin: str = BEGIN, end: str = END) -> s
 
 
 def publish(report: BenchReport, out: Path, document: Path) -> Path:
-    """Copy ``out``'s plot and results.json beside ``document`` and splice the report into it.
+    """Copy ``out``'s plot, scene images and results.json beside ``document`` and splice the
+    report into it.
 
     Returns:
         The folder the plot and JSON were copied to.
@@ -66,6 +68,8 @@ def publish(report: BenchReport, out: Path, document: Path) -> Path:
     results.mkdir(exist_ok=True)
     for name in (report.plot_name, "results.json"):
         shutil.copyfile(out / name, results / name)
+    if (out / IMAGES_FOLDER).is_dir():
+        shutil.copytree(out / IMAGES_FOLDER, results / IMAGES_FOLDER, dirs_exist_ok=True)
     linked = dataclasses.replace(report, plot_name=f"{RESULTS_FOLDER}/{report.plot_name}")
     document.write_text(splice(document.read_text(), render_markdown(linked)))
     return results

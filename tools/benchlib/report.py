@@ -17,6 +17,7 @@ from benchlib.numbers import DASH, fmt
 from benchlib.paper import COMPARISONS
 from benchlib.plan import METHOD, TABLE4_ROWS, Plan
 from benchlib.results import RunRow
+from benchlib.scene_images import ERROR_GAIN, IMAGES_FOLDER
 from benchlib.sessions import SessionOutcome
 from benchlib.tables import capture_table, comparison_lines, markdown_table, runs_table
 from benchlib.verdicts import TIE_DB, ComparisonVerdict, judge
@@ -27,6 +28,7 @@ __all__ = [
     "judge_all",
     "render_markdown",
     "scene_rows",
+    "scene_sessions",
     "seed_scores",
     "target_checks",
     "tie_limit",
@@ -374,6 +376,29 @@ def _session_lines(report: BenchReport) -> list[str]:
     return [markdown_table(headers, body)]
 
 
+def scene_sessions(report: BenchReport) -> dict[str, Path]:
+    """The folder of every session of the scene table (its ``full`` ran at the top budget)."""
+    return {key: outcome.folder for key, _, _, outcome in _scene_runs(report) if outcome}
+
+
+def _scene_image_lines(report: BenchReport) -> list[str]:
+    """Links to each scene's side-by-side image (:mod:`benchlib.scene_images`)."""
+    keys = list(scene_sessions(report))
+    if not keys:
+        return []
+    folder = Path(report.plot_name).parent / IMAGES_FOLDER
+    lines = [
+        "The first held-out view of each scene, as it is scored (each render times its global "
+        "scale, tone-mapped relative to the truth's peak): truth, `full`, `oracle` (grey when "
+        f"it did not run) and `full`'s error, magnified {ERROR_GAIN:g}x.",
+        "",
+    ]
+    for key in keys:
+        image = folder / f"{key}.png"
+        lines += [f"{key}:", "", f"![{key}: truth, full, oracle, error]({image})", ""]
+    return lines
+
+
 def _speed_lines(speed: SpeedProbe | None) -> list[str]:
     if speed is None:
         return ["Not measured (the main session was not ready)."]
@@ -453,6 +478,7 @@ def render_markdown(report: BenchReport) -> str:
         "",
         markdown_table(SCENE_HEADERS, scene_rows(report)),
         "",
+        *_scene_image_lines(report),
         "### The paper's comparisons on our data",
         "",
         f"Preset {plan.table_preset}, budget {plan.table_budget_s:g} s; ours are tone-mapped HDR "
