@@ -14,8 +14,9 @@ One command regenerates every number of the report:
    reused by later runs.
 2. Runs: each preset x variant, each in its own ``seecap fit`` process per budget (a ladder of
    budgets resumes one run), scored on the held-out views against the emulator's truth; on
-   every scene, ``full`` beside ``oracle`` at the top budget. The full plan is 155 minutes of
-   training, about three and a half hours in all on a 2-core machine (``benchlib/plan.py``).
+   every scene, ``full`` beside ``oracle`` at the top budget; every row the paper's comparisons
+   rank with two more seeds. The full plan is 236 minutes of training, about five hours in all
+   on a 2-core machine one rung at a time (``benchlib/plan.py``).
 3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here.
 4. Capture side: ``bench_decode.py``, ``bench_usb.py`` and ``bench_record.py``.
 

@@ -49,12 +49,15 @@ def test_quick_plan_with_table4():
 def test_full_plan_ladders_and_totals():
     plan = make_plan(False, PRESETS, VARIANTS)
     assert plan.table_budget_s == 180.0 and plan.views == (16, 8)
-    # Two more seeds of the fast preset's full at the table budget measure the seed spread.
+    # Two more seeds of every row the paper's comparisons rank, at the table budget, last:
+    # the nine compared variants on the main session, then full on the five Table 4 sessions.
     repeats = [ladder for ladder in plan.ladders if ladder.seed]
-    assert [(r.session, r.preset, r.variant, r.budgets_s, r.seed) for r in repeats] == [
-        ("room", "fast", "full", (180.0,), 1),
-        ("room", "fast", "full", (180.0,), 2),
-    ]
+    assert plan.ladders[-len(repeats) :] == tuple(repeats) and len(repeats) == 2 * (9 + 5)
+    assert {(r.preset, r.budgets_s) for r in repeats} == {("fast", (180.0,))}
+    compared = {r.variant for r in repeats if r.session == "room"}
+    assert compared == set(VARIANTS) - {"multi-exposure", "oracle"}
+    assert {r.session for r in repeats if r.session != "room"} == set(TABLE4_ROWS.values())
+    assert [r.seed for r in repeats] == [1] * 9 + [2] * 9 + [1] * 5 + [2] * 5
     by_run = {
         (ladder.session, ladder.preset, ladder.variant): ladder.budgets_s
         for ladder in plan.ladders
@@ -86,10 +89,10 @@ def test_full_plan_ladders_and_totals():
     assert set(scenes.values()) == {(600.0,)}
     assert [s.key for s in plan.sessions[-4:]] == ["lamp", "corridor", "room-mono", "lamp-film"]
     assert len(plan.sessions) == 10
-    # 2 x 10 min + 9 x 3 min + 7 min (oracle on) + 2 x 3 min (seeds) + 5 x 3 min + 8 x 10 min
-    # = 155 min in 2 x 3 + 9 + 1 + 2 + 5 + 8 = 31 rungs.
-    assert planned_training_s(plan) == 155 * 60.0
-    assert planned_rungs(plan) == 31
+    # 2 x 10 min + 9 x 3 min + 7 min (oracle on) + 5 x 3 min + 8 x 10 min + seeds 28 x 3 min
+    # = 233 min in 2 x 3 + 9 + 1 + 5 + 8 + 28 = 57 rungs.
+    assert planned_training_s(plan) == 233 * 60.0
+    assert planned_rungs(plan) == 57
     assert "presets other than fast run only the full variant" in plan.notes
     assert any(note.startswith("the paper preset is not fitted: one fit") for note in plan.notes)
 
@@ -99,7 +102,8 @@ def test_full_plan_without_table4_or_scenes():
     assert "Table 4 sessions not made" in plan.notes
     assert "the other benchmark scenes not made" in plan.notes
     assert [s.key for s in plan.sessions] == ["room"]
-    assert planned_training_s(plan) == (155 - 15 - 80) * 60.0 and planned_rungs(plan) == 18
+    # 2 x 10 + 9 x 3 + 7 min, then 9 compared variants x 2 seeds x 3 min, in 16 + 18 rungs.
+    assert planned_training_s(plan) == (20 + 27 + 7 + 54) * 60.0 and planned_rungs(plan) == 34
 
 
 def test_quick_plan_totals():
@@ -126,7 +130,9 @@ def test_overridden_budgets_put_the_table_budget_on_the_table_presets_ladder():
         ("fast", "base", (600.0,), 0),
         ("balanced", "full", (900.0, 1200.0), 0),
         ("fast", "full", (600.0,), 1),
+        ("fast", "base", (600.0,), 1),
         ("fast", "full", (600.0,), 2),
+        ("fast", "base", (600.0,), 2),
     ]
 
 

@@ -10,6 +10,7 @@ from benchlib.plan import make_plan
 from benchlib.readback import StaleResults, report_from_json
 from benchlib.report import (
     BenchReport,
+    comparison_seeds,
     judge_all,
     render_markdown,
     scene_rows,
@@ -287,3 +288,26 @@ def test_every_scene_and_every_capture_figure_has_its_target_checked(tmp_path):
     assert checks["bench_usb.py: word decoder, M words/s"] == ["86.00", ">= 50", "met"]
     overflow = "bench_usb.py: end to end, host queue overflow, packets"
     assert checks[overflow] == [DASH, "== 0", "not measured"]
+
+
+def test_rows_with_seeds_are_judged_on_their_means():
+    rows = [
+        scene_run("room", "full", 31.6, 28.5, budget=180.0),
+        scene_run("room", "full", 31.9, 28.9, budget=180.0, seed=1),
+        scene_run("room", "full", 31.3, 28.2, budget=180.0, seed=2),
+        scene_run("room", "base", 30.0, 28.0, budget=180.0),
+        scene_run("room", "base", 30.2, 28.0, budget=180.0, seed=1),
+        scene_run("room", "base", 29.8, 28.0, budget=180.0, seed=2),
+        scene_run("room", "base", 10.0, 8.0, budget=600.0, seed=1),  # another budget: not read
+    ]
+    report = full_report(rows)
+    seeds = comparison_seeds(report, "variant", ["full", "base", "no-events"])
+    assert seeds == {"full": [31.6, 31.9, 31.3], "base": [30.0, 30.2, 29.8], "no-events": []}
+    table3 = next(v for v in judge_all(report) if v.comparison.title.startswith("Table 3"))
+    claim = next(c for c in table3.claims if (c.claim.better, c.claim.worse) == ("full", "base"))
+    # 31.6 - 30.0 = 1.6 dB against 2 sqrt((0.09 + 0.04) / 3) = 0.42 dB: an ordering.
+    assert claim.outcome == "holds" and claim.seeds == 3
+    assert math.isclose(claim.limit_db, 2 * math.sqrt(0.13 / 3))
+    assert "(31.60 vs 30.00 dB, +1.60; means of 3 seeds, a tie within 0.42)" in render_markdown(
+        report
+    )

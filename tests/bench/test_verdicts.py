@@ -84,3 +84,35 @@ def test_explain_difference_leaves_out_unmeasured_components():
         row("full", 20.0, fit_psnr=math.nan), row("base", 21.0, fit_psnr=math.nan)
     )
     assert "blurry input" not in text
+
+
+def test_with_seeds_the_means_are_compared_within_twice_their_standard_error():
+    rows = {
+        "full": row("full", 25.0),
+        "deblur-e-lowpass": row("deblur-e-lowpass", 24.0),
+        "v2e-lowpass": row("v2e-lowpass", 23.0),
+    }
+    seeds = {
+        "full": [25.0, 25.5, 24.5],  # mean 25.0, variance 0.25, of the mean 0.25 / 3
+        "deblur-e-lowpass": [24.0, 25.0, 24.5],  # mean 24.5, same variance
+        "v2e-lowpass": [23.0, 23.1, 22.9],  # mean 23.0, variance 0.01
+    }
+    verdict = judge(TABLE_9_LOWPASS, rows, seeds=seeds)
+    claims = {(c.claim.better, c.claim.worse): c for c in verdict.claims}
+    # full vs deblur-e: 0.5 dB apart, twice the standard error 2 sqrt(0.5 / 3) = 0.816 dB.
+    tie = claims[("full", "deblur-e-lowpass")]
+    assert tie.outcome == "tie" and tie.seeds == 3
+    assert math.isclose(tie.limit_db, 2 * math.sqrt(0.5 / 3))
+    assert (tie.better_db, tie.worse_db) == (25.0, 24.5)
+    # deblur-e vs v2e: 1.5 dB apart against 2 sqrt(0.26 / 3) = 0.589 dB.
+    assert claims[("deblur-e-lowpass", "v2e-lowpass")].outcome == "holds"
+    assert verdict.summary == (
+        "undecided: 2 of 3 orderings as in the paper "
+        "(1 within twice the standard error of the difference)"
+    )
+    # A side with a single run falls back to the fixed limit and the default seeds' scores.
+    single = judge(TABLE_9_LOWPASS, rows, tie_db=0.05, seeds={**seeds, "v2e-lowpass": [23.0]})
+    alone = {(c.claim.better, c.claim.worse): c for c in single.claims}
+    assert alone[("full", "v2e-lowpass")].seeds == 1
+    assert alone[("full", "v2e-lowpass")].limit_db == 0.05
+    assert alone[("full", "v2e-lowpass")].better_db == 25.0

@@ -1,22 +1,25 @@
 """What one benchmark run measures: the sessions, and every preset x variant budget ladder.
 
-The full plan is sized to about three and a half hours of wall time on a 2-core machine:
-149 minutes of training (the table preset's ``full`` up 1, 3 and 10 minutes, its nine other
-variants at the 3-minute table budget, its ``oracle`` on to 10 minutes, ``balanced`` ``full`` up
-the ladder, ``full`` and ``oracle`` for 10 minutes on each of the four other benchmark scenes,
-Table 4's five sessions at the table budget) in 29 rungs, each adding about a minute of
-start-up, rendering and scoring on an idle machine, plus making the ten sessions and the
-capture-side tools. The ``paper`` preset is measured for speed only
-(:data:`FULL_UNFITTED_PRESETS`).
+The full plan: 236 minutes of training (the table preset's ``full`` up 1, 3 and 10 minutes,
+its ten other variants at the 3-minute table budget, its ``oracle`` on to 10 minutes,
+``balanced`` ``full`` up the ladder, ``full`` and ``oracle`` for 10 minutes on each of the four
+other benchmark scenes, Table 4's five sessions at the table budget, and two more seeds of every
+row the paper's comparisons rank) in 58 rungs, each adding about a minute of start-up, rendering
+and scoring on an idle machine, plus making the ten sessions and the capture-side tools: about
+five hours one rung at a time on a 2-core machine; ``--ray local`` runs two rungs side by side,
+one core each (0.65x the wall time on the quick plan, BENCHMARKS.md). The ``paper`` preset is
+measured for speed only (:data:`FULL_UNFITTED_PRESETS`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from benchlib.paper import COMPARISONS
 from seenerf.model.config import DEFAULT_VARIANT
 
 __all__ = [
+    "COMPARED_VARIANTS",
     "FULL_BUDGETS_S",
     "METHOD",
     "QUICK_BUDGETS_S",
@@ -169,9 +172,15 @@ table preset's ``full`` and ``oracle`` at the top budget: the trainer's targets 
 SCENE_VARIANTS = (METHOD, UPPER_BOUND)
 
 SEED_REPEATS = (1, 2)
-"""Seeds of two more runs of the table preset's ``full`` at the table budget: beside the default
-seed's run they measure how far a score moves with the random draws alone, which tells a
-difference between variants from noise."""
+"""Seeds of two more runs of every row of the paper's comparisons at the table budget (each
+compared variant on the main session, ``full`` on each Table 4 session): beside the default
+seed's run they give each row a mean and a standard error, so an ordering counts only where the
+difference of two means exceeds twice its standard error."""
+
+COMPARED_VARIANTS = frozenset(
+    key for comparison in COMPARISONS if comparison.axis == "variant" for key in comparison.rows
+)
+"""Variants some comparison of the paper ranks (their rows get :data:`SEED_REPEATS`)."""
 
 TABLE4_SESSIONS = (
     SessionSpec(
@@ -272,10 +281,11 @@ def make_plan(
             other variants (Tables 3 and 9) run at the table budget; every other preset runs
             only ``full``, up the ladder; each Table 4 session runs ``full`` at the table
             budget; each of :data:`SCENE_SESSIONS` runs :data:`SCENE_VARIANTS` at the top
-            budget, and so does the main session's ``oracle``; the table preset's ``full``
-            runs again at the table budget with each of :data:`SEED_REPEATS`; presets of
-            :data:`FULL_UNFITTED_PRESETS` are not fitted. With the defaults that is 155
-            minutes of training in 31 rungs.
+            budget, and so does the main session's ``oracle``; every row a comparison ranks
+            (:data:`COMPARED_VARIANTS` on the main session, ``full`` on each Table 4 session)
+            runs again at the table budget with each of :data:`SEED_REPEATS`, last; presets of
+            :data:`FULL_UNFITTED_PRESETS` are not fitted. With the defaults that is 236
+            minutes of training in 58 rungs.
         presets: every preset to run.
         variants: every variant to run (unsupported ones are left out with a note).
         budgets_s: the budget ladder, s (default: :data:`QUICK_BUDGETS_S` or
@@ -295,6 +305,7 @@ def make_plan(
         if name in variants
     ]
     variants = tuple(v for v in variants if v not in UNSUPPORTED_VARIANTS)
+    repeats: list[Ladder] = []
     if quick:
         dropped = [v for v in variants if v not in QUICK_VARIANTS]
         variants = tuple(v for v in variants if v in QUICK_VARIANTS)
@@ -324,11 +335,16 @@ def make_plan(
     else:
         fitted = tuple(p for p in presets if p not in FULL_UNFITTED_PRESETS)
         ladders = _grid(fitted, variants, budgets, table_budget, table_preset, oracle_at_top=True)
-        if table_preset in fitted and METHOD in variants:
-            ladders += [
-                Ladder(MAIN_SESSION.key, table_preset, METHOD, (table_budget,), seed=seed)
-                for seed in SEED_REPEATS
-            ]
+        compared = [
+            ladder.variant
+            for ladder in ladders
+            if ladder.preset == table_preset and ladder.variant in COMPARED_VARIANTS
+        ]
+        repeats = [
+            Ladder(MAIN_SESSION.key, table_preset, variant, (table_budget,), seed=seed)
+            for seed in SEED_REPEATS
+            for variant in compared
+        ]
         if any(p != table_preset for p in fitted) and any(v != METHOD for v in variants):
             notes.append(f"presets other than {table_preset} run only the full variant")
         notes += [
@@ -344,6 +360,12 @@ def make_plan(
     else:
         sessions += TABLE4_SESSIONS
         ladders += [Ladder(s.key, table_preset, METHOD, (table_budget,)) for s in TABLE4_SESSIONS]
+        if not quick:
+            repeats += [
+                Ladder(s.key, table_preset, METHOD, (table_budget,), seed=seed)
+                for seed in SEED_REPEATS
+                for s in TABLE4_SESSIONS
+            ]
     if scenes is None:
         scenes = not quick
     if not scenes:
@@ -360,7 +382,7 @@ def make_plan(
         quick,
         (4, 2) if quick else (16, 8),
         tuple(sessions),
-        tuple(ladders),
+        tuple(ladders + repeats),
         table_preset,
         table_budget,
         tuple(notes),

@@ -25,6 +25,7 @@ from benchlib.verdicts import TIE_DB, ComparisonVerdict, judge
 __all__ = [
     "BenchReport",
     "comparison_rows",
+    "comparison_seeds",
     "judge_all",
     "render_markdown",
     "scene_rows",
@@ -86,6 +87,23 @@ def comparison_rows(report: BenchReport, axis: str, keys: list[str]) -> dict[str
     return {k: _at(report.rows, main, plan.table_preset, k, plan.table_budget_s) for k in keys}
 
 
+def comparison_seeds(report: BenchReport, axis: str, keys: list[str]) -> dict[str, list[float]]:
+    """HDR PSNR of every seed's scored run behind each row key, at the table budget."""
+    plan = report.plan
+    main = plan.sessions[0].key
+    where = {k: (TABLE4_ROWS[k], METHOD) if axis == "session" else (main, k) for k in keys}
+    return {
+        key: [
+            r.hdr_psnr
+            for r in sorted(report.rows, key=lambda r: r.seed)
+            if (r.session, r.variant) == (session, variant)
+            and (r.preset, r.budget_s) == (plan.table_preset, plan.table_budget_s)
+            and r.ok
+        ]
+        for key, (session, variant) in where.items()
+    }
+
+
 def seed_scores(report: BenchReport) -> list[tuple[int, float]]:
     """``(seed, HDR PSNR)`` of the table preset's ``full`` at the table budget, every seed run."""
     plan = report.plan
@@ -105,9 +123,19 @@ def tie_limit(report: BenchReport) -> float:
 
 
 def judge_all(report: BenchReport) -> list[ComparisonVerdict]:
-    """Every paper comparison judged on the runs measured so far, ties within the seed spread."""
+    """Every paper comparison judged on the runs measured so far: where both sides of an
+    ordering ran several seeds, their means, a tie within twice the standard error of the
+    difference; else the default seeds' runs, a tie within ``full``'s seed spread."""
     tie_db = tie_limit(report)
-    return [judge(c, comparison_rows(report, c.axis, list(c.rows)), tie_db) for c in COMPARISONS]
+    return [
+        judge(
+            c,
+            comparison_rows(report, c.axis, list(c.rows)),
+            tie_db,
+            comparison_seeds(report, c.axis, list(c.rows)),
+        )
+        for c in COMPARISONS
+    ]
 
 
 def _seed_line(report: BenchReport) -> str:
@@ -120,8 +148,9 @@ def _seed_line(report: BenchReport) -> str:
     listed = ", ".join(f"seed {seed}: {fmt(score)}" for seed, score in scores)
     return (
         f"Seed spread: `full` at this budget scored {listed} dB with nothing but the seed "
-        f"changed, a spread of {fmt(tie_limit(report))} dB; differences smaller than that "
-        "are ties, not orderings."
+        f"changed, a spread of {fmt(tie_limit(report))} dB. Rows that ran several seeds are "
+        "compared by their means, an ordering only where the difference exceeds twice its "
+        "standard error; a row with one run is compared within that spread."
     )
 
 

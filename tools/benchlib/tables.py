@@ -119,7 +119,12 @@ def comparison_lines(verdict: ComparisonVerdict, rows: dict[str, RunRow | None])
         line = (
             f"- paper: {said.better} > {said.worse} ({said.better_db:.2f} vs "
             f"{said.worse_db:.2f} dB, {said.column}); here: {words[claim.outcome]} "
-            f"({claim.better_db:.2f} vs {claim.worse_db:.2f} dB, {gap:+.2f})"
+            f"({claim.better_db:.2f} vs {claim.worse_db:.2f} dB, {gap:+.2f}"
+            + (
+                f"; means of {claim.seeds} seeds, a tie within {claim.limit_db:.2f})"
+                if claim.seeds > 1
+                else ")"
+            )
         )
         lines.append(line + (f". Measured: {claim.reason}" if claim.reason else ""))
     if unmeasured:

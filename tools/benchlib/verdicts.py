@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import statistics
 from dataclasses import dataclass
 
 from benchlib.numbers import fmt
@@ -23,11 +24,15 @@ class ClaimVerdict:
 
     Attributes:
         claim: the paper's ordering.
-        outcome: ``holds``, ``reversed``, ``tie`` (within :data:`TIE_DB`) or ``not measured``
+        outcome: ``holds``, ``reversed``, ``tie`` (within ``limit_db``) or ``not measured``
             (a run missing or failed).
-        better_db: our HDR PSNR of the row the paper ranks higher, dB.
-        worse_db: our HDR PSNR of the row the paper ranks lower, dB.
+        better_db: our HDR PSNR of the row the paper ranks higher, dB (the mean over its seeds
+            when several ran).
+        worse_db: our HDR PSNR of the row the paper ranks lower, dB (likewise).
         reason: measured per-component differences (filled unless it holds or is unmeasured).
+        seeds: runs behind each side's score (1: the default seed's run alone).
+        limit_db: the difference under which the ordering is a tie: twice the standard error of
+            the difference of the means when both sides ran several seeds, else the fixed limit.
     """
 
     claim: Claim
@@ -35,6 +40,8 @@ class ClaimVerdict:
     better_db: float = math.nan
     worse_db: float = math.nan
     reason: str = ""
+    seeds: int = 1
+    limit_db: float = TIE_DB
 
 
 @dataclass(frozen=True)
@@ -55,10 +62,16 @@ class ComparisonVerdict:
         judged = len(self.claims) - counts["not measured"]
         if judged == 0:
             return "not measured"
+        seeded = all(c.seeds > 1 for c in self.claims if c.outcome == "tie")
+        tie_words = (
+            "within twice the standard error of the difference"
+            if seeded
+            else f"within {self.tie_db:.2f} dB"
+        )
         extra = [
             f"{counts[o]} {word}"
             for o, word in (
-                ("tie", f"within {self.tie_db:.2f} dB"),
+                ("tie", tie_words),
                 ("not measured", "not measured"),
             )
             if counts[o]
@@ -104,24 +117,43 @@ def explain_difference(better: RunRow, worse: RunRow) -> str:
     return "; ".join(parts)
 
 
+def _mean_and_variance(scores: list[float]) -> tuple[float, float]:
+    """Mean and the variance of the mean (sample variance over n)."""
+    return statistics.fmean(scores), statistics.variance(scores) / len(scores)
+
+
 def judge(
-    comparison: Comparison, rows: dict[str, RunRow | None], tie_db: float = TIE_DB
+    comparison: Comparison,
+    rows: dict[str, RunRow | None],
+    tie_db: float = TIE_DB,
+    seeds: dict[str, list[float]] | None = None,
 ) -> ComparisonVerdict:
     """Check each of the paper's orderings on our HDR PSNR.
 
     Args:
         comparison: the paper's comparison.
-        rows: our run for each row key of the comparison (None or failed: not measured).
-        tie_db: differences below this are ties (the measured seed spread, when there is one).
+        rows: our default-seed run for each row key of the comparison (None or failed: not
+            measured).
+        tie_db: differences below this are ties when a side ran one seed only.
+        seeds: each row key's HDR PSNR over every seed that ran (the default's included); when
+            both sides of an ordering have two or more, their means are compared and a
+            difference within twice its standard error is a tie.
     """
+    seeds = seeds or {}
     verdicts = []
     for claim in paper_claims(comparison):
         better, worse = rows.get(claim.better), rows.get(claim.worse)
         if better is None or worse is None or not (better.ok and worse.ok):
             verdicts.append(ClaimVerdict(claim, "not measured"))
             continue
-        gap = better.hdr_psnr - worse.hdr_psnr
-        outcome = "tie" if abs(gap) < tie_db else "holds" if gap > 0 else "reversed"
+        ours = seeds.get(claim.better, []), seeds.get(claim.worse, [])
+        if min(len(scores) for scores in ours) >= 2:
+            (high, high_var), (low, low_var) = map(_mean_and_variance, ours)
+            limit, runs = 2 * math.sqrt(high_var + low_var), min(map(len, ours))
+        else:
+            high, low, limit, runs = better.hdr_psnr, worse.hdr_psnr, tie_db, 1
+        gap = high - low
+        outcome = "tie" if abs(gap) <= limit else "holds" if gap > 0 else "reversed"
         reason = "" if outcome == "holds" else explain_difference(better, worse)
-        verdicts.append(ClaimVerdict(claim, outcome, better.hdr_psnr, worse.hdr_psnr, reason))
+        verdicts.append(ClaimVerdict(claim, outcome, high, low, reason, runs, limit))
     return ComparisonVerdict(comparison, tuple(verdicts), tie_db)
