@@ -78,20 +78,22 @@ def _at(
 def comparison_rows(report: BenchReport, axis: str, keys: list[str]) -> dict[str, RunRow | None]:
     """Our run for each row key: a variant on the main session, or a Table 4 session's ``full``."""
     plan = report.plan
-    if axis == "session":
-        return {
-            k: _at(report.rows, TABLE4_ROWS[k], plan.table_preset, METHOD, plan.table_budget_s)
-            for k in keys
-        }
-    main = plan.sessions[0].key
-    return {k: _at(report.rows, main, plan.table_preset, k, plan.table_budget_s) for k in keys}
+    return {
+        key: _at(report.rows, session, plan.table_preset, variant, plan.table_budget_s)
+        for key, (session, variant) in _row_places(report, axis, keys).items()
+    }
+
+
+def _row_places(report: BenchReport, axis: str, keys: list[str]) -> dict[str, tuple[str, str]]:
+    """``(session, variant)`` behind each row key of a comparison on ``axis``."""
+    main = report.plan.sessions[0].key
+    return {k: (TABLE4_ROWS[k], METHOD) if axis == "session" else (main, k) for k in keys}
 
 
 def comparison_seeds(report: BenchReport, axis: str, keys: list[str]) -> dict[str, list[float]]:
     """HDR PSNR of every seed's scored run behind each row key, at the table budget."""
     plan = report.plan
-    main = plan.sessions[0].key
-    where = {k: (TABLE4_ROWS[k], METHOD) if axis == "session" else (main, k) for k in keys}
+    where = _row_places(report, axis, keys)
     return {
         key: [
             r.hdr_psnr
