@@ -28,7 +28,16 @@ def test_fmt_rounds_and_dashes_missing_values():
 def test_runs_are_sorted_by_session_preset_variant_budget():
     usage = ProcessUsage(0, 70.0, 130.0, 1234.4)
     rows = [
-        RunRow("room", "fast", "full", 180.0, hdr_psnr=21.0, process=usage),
+        RunRow(
+            "room",
+            "fast",
+            "full",
+            180.0,
+            hdr_psnr=21.0,
+            registered_hdr_psnr=23.456,
+            registered_novel_psnr=22.0,
+            process=usage,
+        ),
         RunRow("room", "balanced", "full", 60.0, hdr_psnr=19.0),
         RunRow("room", "fast", "full", 60.0, hdr_psnr=20.0),
     ]
@@ -40,6 +49,8 @@ def test_runs_are_sorted_by_session_preset_variant_budget():
     ]
     # Process wall, CPU and peak MB of the 3 min row, rounded to whole numbers.
     assert "| 70 | 130 | 1234 | ok |" in lines[2]
+    # The registered scores beside the mapped ones; a run without them shows dashes.
+    assert "| 23.46 / 22.00 |" in lines[2] and "| — / — |" in lines[0]
 
 
 def test_comparison_lines_show_paper_beside_ours_and_the_verdict():

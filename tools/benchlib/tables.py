@@ -25,7 +25,11 @@ def _budget(seconds: float) -> str:
 
 
 def runs_table(rows: list[RunRow]) -> str:
-    """Every run at every budget, sorted by session, preset, variant and budget."""
+    """Every run at every budget, sorted by session, preset, variant and budget.
+
+    Scores are at the mapped test poses; the registered ones (each test pose refined against
+    its own image first) are an extra column.
+    """
     ordered = sorted(rows, key=lambda r: (r.session, r.preset, r.variant, r.seed, r.budget_s))
     body = []
     for r in ordered:
@@ -44,6 +48,7 @@ def runs_table(rows: list[RunRow]) -> str:
                 fmt(r.hdr_ssim, 4),
                 fmt(r.novel_psnr),
                 fmt(r.novel_ssim, 4),
+                f"{fmt(r.registered_hdr_psnr)} / {fmt(r.registered_novel_psnr)}",
                 fmt(r.render_s_per_view),
                 fmt(usage.wall_s if usage else None, 0),
                 fmt(usage.cpu_s if usage else None, 0),
@@ -64,6 +69,7 @@ def runs_table(rows: list[RunRow]) -> str:
         "HDR SSIM",
         "novel PSNR",
         "novel SSIM",
+        "registered HDR / novel PSNR (extra)",
         "render s/view",
         "process wall s",
         "CPU s",
