@@ -16,8 +16,11 @@ One command regenerates every number of the report:
    budgets resumes one run), scored on the held-out views against the emulator's truth; on
    every scene, ``full`` beside ``oracle`` at the top budget; every row the paper's comparisons
    rank with two more seeds. The full plan is 236 minutes of training, about five hours in all
-   on a 2-core machine one rung at a time (``benchlib/plan.py``).
-3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here.
+   on a 2-core machine one rung at a time (``benchlib/plan.py``). Then every row of a
+   comparison that trained past that comparison's fewest steps is trained again to end there
+   (``benchlib/matching.py``; at most one run per compared row, each shorter than the budget).
+3. The paper's Tables 3, 9 and 4 beside our numbers, with whether each ordering holds here,
+   matched on time and on steps.
 4. Capture side: ``bench_decode.py``, ``bench_usb.py`` and ``bench_record.py``.
 
 Writes ``OUT/report.md`` (a section for BENCHMARKS.md), ``OUT/results.json``,
@@ -41,14 +44,20 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from benchlib.capture import CAPTURE_BENCHES, run_capture_bench
-from benchlib.fits import run_ladder, run_speed_probe
+from benchlib.fits import run_ladder, run_speed_probe, rung_row
 from benchlib.machine import describe_machine, exact_command, source_commit
-from benchlib.plan import make_plan, planned_rungs, planned_training_s
+from benchlib.plan import Ladder, make_plan, planned_rungs, planned_training_s
 from benchlib.plot import speed_error_figure, write_png
 from benchlib.poses_step import POSE_SOURCES, resolve_pose_source
 from benchlib.publish import publish
 from benchlib.readback import StaleResults, report_from_json
-from benchlib.report import BenchReport, render_markdown, scene_sessions, write_json
+from benchlib.report import (
+    BenchReport,
+    render_markdown,
+    scene_sessions,
+    steps_matched_ladders,
+    write_json,
+)
 from benchlib.results import RunRow
 from benchlib.scene_images import write_scene_images
 from benchlib.sessions import prepare_session
@@ -168,19 +177,19 @@ def prepare_sessions(report: BenchReport, out: Path) -> dict[str, Path]:
 
 
 def _not_ready(ladder) -> RunRow:
-    return RunRow(
-        ladder.session,
-        ladder.preset,
-        ladder.variant,
-        ladder.budgets_s[0],
-        seed=ladder.seed,
-        status="session not ready",
-    )
+    return rung_row(ladder, 0, status="session not ready")
 
 
-def run_fits(report: BenchReport, ready: dict[str, Path], out: Path, started: float, args) -> None:
-    """Every ladder of the plan in turn; the report is rewritten after each."""
-    for ladder in report.plan.ladders:
+def run_fits(
+    report: BenchReport,
+    ladders: list[Ladder],
+    ready: dict[str, Path],
+    out: Path,
+    started: float,
+    args,
+) -> None:
+    """Every ladder in turn; the report is rewritten after each."""
+    for ladder in ladders:
         if ladder.session not in ready:
             report.rows.append(_not_ready(ladder))
             continue
@@ -191,21 +200,37 @@ def run_fits(report: BenchReport, ready: dict[str, Path], out: Path, started: fl
         write_outputs(report, out)
 
 
-def run_fits_on_ray(report: BenchReport, ready: dict[str, Path], out: Path, args) -> None:
-    """Every rung of the plan as a Ray task (ladders side by side); rows in the plan's order."""
+def run_fits_on_ray(
+    report: BenchReport, ladders: list[Ladder], ready: dict[str, Path], out: Path, args
+) -> None:
+    """Every rung as a Ray task (ladders side by side); rows in the ladders' order."""
     from benchlib.cluster import run_ladders_on_ray
 
-    ladders = [ladder for ladder in report.plan.ladders if ladder.session in ready]
     trained = iter(
         run_ladders_on_ray(
-            [(ladder, ready[ladder.session]) for ladder in ladders],
+            [(ladder, ready[ladder.session]) for ladder in ladders if ladder.session in ready],
             out,
             address=args.ray,
             fresh=args.fresh,
         )
     )
-    for ladder in report.plan.ladders:
+    for ladder in ladders:
         report.rows += next(trained) if ladder.session in ready else [_not_ready(ladder)]
+
+
+def train(
+    report: BenchReport,
+    ladders: list[Ladder],
+    ready: dict[str, Path],
+    out: Path,
+    started: float,
+    args,
+) -> None:
+    """The ladders one at a time here, or as Ray tasks with ``--ray``."""
+    if args.ray:
+        run_fits_on_ray(report, ladders, ready, out, args)
+    else:
+        run_fits(report, ladders, ready, out, started, args)
 
 
 def _exit_on_sigterm(signum: int, frame) -> None:
@@ -267,10 +292,11 @@ def main(argv: list[str] | None = None, command: str | None = None) -> int:
     if main_session in ready:
         report.speed = run_speed_probe(ready[main_session], out / "logs")
         print(f"preset speed: {report.speed.error or report.speed.rays_per_s}")
-    if args.ray:
-        run_fits_on_ray(report, ready, out, args)
-    else:
-        run_fits(report, ready, out, started, args)
+    train(report, list(plan.ladders), ready, out, started, args)
+    matched = steps_matched_ladders(report)
+    if matched:
+        print(f"comparisons matched on steps: {len(matched)} more runs")
+        train(report, matched, ready, out, started, args)
     report.wall_s = time.monotonic() - started
     write_outputs(report, out)
     print(f"report: {out / 'report.md'} ({report.wall_s / 60:.1f} min)")

@@ -15,6 +15,7 @@ from benchlib.report import (
     render_markdown,
     scene_rows,
     seed_scores,
+    steps_matched_ladders,
     target_checks,
     tie_limit,
     write_json,
@@ -50,7 +51,7 @@ def run(variant, hdr, budget=20.0, preset="fast", **kwargs):
         hdr_ssim=0.9,
         novel_psnr=hdr + 2,
         novel_ssim=0.9,
-        steps=10,
+        steps=kwargs.pop("steps", 10),
         train_s=budget,
         rays_per_s=kwargs.pop("rays", 1e4),
         render_s_per_view=kwargs.pop("render", 0.5),
@@ -314,3 +315,30 @@ def test_rows_with_seeds_are_judged_on_their_means():
     assert "(31.60 vs 30.00 dB, +1.60; means of 3 seeds, a tie within 0.42)" in render_markdown(
         report
     )
+
+
+def test_comparisons_are_matched_on_steps_as_well_as_on_time():
+    # At the 20 s table budget base trained three times the steps of full and scored higher,
+    # reversing the paper's full (no-events) > base; at full's 1000 steps it scores lower.
+    rows = [
+        run("full", 24.0, steps=1000),
+        run("base", 25.0, steps=3000),
+        run("no-events", 23.0, steps=1050),  # within 10 % of 1000: matched as it is
+    ]
+    report = report_with(rows)
+    (ladder,) = steps_matched_ladders(report)
+    assert (ladder.variant, ladder.steps, ladder.budgets_s) == ("base", 1000, (40.0,))
+    text = render_markdown(report)
+    assert "no-events > base: holds on steps" not in text  # base's matched run is missing
+    report.rows.append(run("base", 21.0, budget=40.0, steps=1000, step_cap=1000))
+    assert steps_matched_ladders(report) == [ladder]  # the same run, not a second one
+    text = render_markdown(report)
+    assert (
+        "Matched on steps: every row at 1000 steps, the fewest any row trained in 20 s (base "
+        "trained again to end there; the default seed, a tie within the seed spread): **holds: "
+        "all 3 orderings as in the paper (12 not measured)**." in text
+    )
+    assert "- no-events > base: holds on steps (23.00 vs 21.00 dB), reversed on time" in text
+    assert "- full > base: holds on steps (24.00 vs 21.00 dB), reversed on time" in text
+    # The run ended at 1000 steps is not the 40 s row of the time-matched reading.
+    assert {c[0]: c[1] for c in target_checks(report)}["full − base, HDR PSNR dB"] == "-1.00"

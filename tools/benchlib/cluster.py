@@ -7,7 +7,14 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TypeVar
 
-from benchlib.fits import kept_row, ladder_goes_on, reusable_rungs, rung_line, train_rung
+from benchlib.fits import (
+    kept_row,
+    ladder_goes_on,
+    reusable_rungs,
+    rung_line,
+    rung_row,
+    train_rung,
+)
 from benchlib.plan import Ladder
 from benchlib.results import RunRow
 from davis_io import describe_error
@@ -110,11 +117,8 @@ def _finished_row(ray, ref, ladder: Ladder, index: int) -> RunRow | None:
     try:
         return ray.get(ref)
     except ray.exceptions.RayError as error:
-        row = RunRow(
-            ladder.session, ladder.preset, ladder.variant, ladder.budgets_s[index], seed=ladder.seed
-        )
-        row.status = f"failed ({type(error).__name__}): {describe_error(error)[:200]}"
-        return row
+        failure = f"failed ({type(error).__name__}): {describe_error(error)[:200]}"
+        return rung_row(ladder, index, status=failure)
 
 
 def _up_to_the_end(rows) -> list[RunRow]:

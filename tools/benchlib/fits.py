@@ -21,6 +21,7 @@ __all__ = [
     "ladder_goes_on",
     "reusable_rungs",
     "rung_line",
+    "rung_row",
     "run_ladder",
     "run_name",
     "run_speed_probe",
@@ -53,9 +54,24 @@ class SpeedProbe:
 
 
 def run_name(ladder: Ladder) -> str:
-    """Run folder name under ``session/fit/`` (with the seed unless it is the default)."""
+    """Run folder name under ``session/fit/`` (with the seed unless it is the default, and the
+    step count it ends at if any)."""
     name = f"bench-{ladder.preset}-{ladder.variant}"
-    return f"{name}-seed{ladder.seed}" if ladder.seed else name
+    name = f"{name}-seed{ladder.seed}" if ladder.seed else name
+    return f"{name}-steps{ladder.steps}" if ladder.steps else name
+
+
+def rung_row(ladder: Ladder, index: int, **fields) -> RunRow:
+    """The row of rung ``index`` of ``ladder``, before anything is read into it."""
+    return RunRow(
+        ladder.session,
+        ladder.preset,
+        ladder.variant,
+        ladder.budgets_s[index],
+        seed=ladder.seed,
+        step_cap=ladder.steps,
+        **fields,
+    )
 
 
 def fit_command(session_dir: Path, ladder: Ladder, budget_s: float, fresh: bool) -> list[str]:
@@ -76,7 +92,11 @@ def fit_command(session_dir: Path, ladder: Ladder, budget_s: float, fresh: bool)
         "--seed",
         str(ladder.seed),
     )
-    return command + (["--fresh"] if fresh else [])
+    return (
+        command
+        + (["--steps", str(ladder.steps)] if ladder.steps else [])
+        + (["--fresh"] if fresh else [])
+    )
 
 
 def _failure(log: Path, returncode: int, timed_out: bool) -> str:
@@ -157,11 +177,8 @@ def _keep(path: Path, metrics: dict, session_dir: Path, usage: ProcessUsage) -> 
 
 def kept_row(ladder: Ladder, index: int, metrics: dict) -> RunRow:
     """The row of a rung an earlier invocation trained, read back from its kept metrics."""
-    row = RunRow(
-        ladder.session, ladder.preset, ladder.variant, ladder.budgets_s[index], seed=ladder.seed
-    )
+    row = rung_row(ladder, index, reused=True)
     row.process = usage_from_json(metrics[KEPT_KEY]["process"])
-    row.reused = True
     return row_from_metrics(row, metrics)
 
 
@@ -189,7 +206,7 @@ def train_rung(
         The rung's scored row, or a row whose status says why it failed.
     """
     budget = ladder.budgets_s[index]
-    row = RunRow(ladder.session, ladder.preset, ladder.variant, budget, seed=ladder.seed)
+    row = rung_row(ladder, index)
     if first_trained:
         for path in kept_path(out_dir, ladder, budget).parent.glob("*s.json"):
             if not _kept_budget(path) < budget:  # this rung's, later ones, unreadable

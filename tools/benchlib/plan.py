@@ -122,7 +122,8 @@ class SessionSpec:
 class Ladder:
     """One (session, preset, variant) trained once, scored at each budget on the way.
 
-    ``seed`` is the fit's random seed (0: ``seecap fit``'s default).
+    ``seed`` is the fit's random seed (0: ``seecap fit``'s default); ``steps`` ends training at
+    that many steps (0: the budgets alone end it).
     """
 
     session: str
@@ -130,6 +131,7 @@ class Ladder:
     variant: str
     budgets_s: tuple[float, ...]
     seed: int = 0
+    steps: int = 0
 
 
 @dataclass(frozen=True)

@@ -161,7 +161,7 @@ def speed_error_figure(rows: list[RunRow], session: str) -> np.ndarray:
     preset/variant run on ``session`` with the default seed."""
     runs: dict[tuple[str, str], list[RunRow]] = {}
     for row in rows:
-        if row.session == session and row.ok and not row.seed:
+        if row.session == session and row.ok and not row.seed and not row.step_cap:
             runs.setdefault((row.preset, row.variant), []).append(row)
     height = max(600, 100 + 22 * len(runs))
     panels = []

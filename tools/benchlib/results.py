@@ -39,6 +39,8 @@ class RunRow:
         variant: model variant.
         budget_s: the time budget the run was given, s (cumulative over resumed rungs).
         seed: the fit's random seed (0: the default).
+        step_cap: the step count the run was told to end at (0: the budget alone ended it;
+            such runs match a comparison on steps, :mod:`benchlib.matching`).
         status: ``ok`` or what went wrong.
         steps: training steps completed in total.
         train_s: training seconds in total (resumed rungs included).
@@ -71,6 +73,7 @@ class RunRow:
     variant: str
     budget_s: float
     seed: int = 0
+    step_cap: int = 0
     status: str = "ok"
     steps: int = 0
     train_s: float = NAN

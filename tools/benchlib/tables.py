@@ -24,13 +24,23 @@ def _budget(seconds: float) -> str:
     return f"{seconds / 60:g} min" if seconds >= 60 and seconds % 60 == 0 else f"{seconds:g} s"
 
 
+def _variant_label(row: RunRow) -> str:
+    """The variant, with its seed and the step count it ended at when not the defaults."""
+    extras = [f"seed {row.seed}"] * bool(row.seed) + [f"ended at {row.step_cap} steps"] * bool(
+        row.step_cap
+    )
+    return f"{row.variant} ({', '.join(extras)})" if extras else row.variant
+
+
 def runs_table(rows: list[RunRow]) -> str:
     """Every run at every budget, sorted by session, preset, variant and budget.
 
     Scores are at the mapped test poses; the registered ones (each test pose refined against
     its own image first) are an extra column.
     """
-    ordered = sorted(rows, key=lambda r: (r.session, r.preset, r.variant, r.seed, r.budget_s))
+    ordered = sorted(
+        rows, key=lambda r: (r.session, r.preset, r.variant, r.seed, r.step_cap, r.budget_s)
+    )
     body = []
     for r in ordered:
         usage = r.process
@@ -38,7 +48,7 @@ def runs_table(rows: list[RunRow]) -> str:
             [
                 r.session,
                 r.preset,
-                f"{r.variant} (seed {r.seed})" if r.seed else r.variant,
+                _variant_label(r),
                 _budget(r.budget_s),
                 str(r.steps),
                 fmt(r.train_s, 0),
