@@ -188,7 +188,11 @@ def run_fits(
     started: float,
     args,
 ) -> None:
-    """Every ladder in turn; the report is rewritten after each."""
+    """Every ladder in turn, the report rewritten after each; with ``--ray`` every rung a Ray
+    task instead (:func:`run_fits_on_ray`)."""
+    if args.ray:
+        run_fits_on_ray(report, ladders, ready, out, args)
+        return
     for ladder in ladders:
         if ladder.session not in ready:
             report.rows.append(_not_ready(ladder))
@@ -216,21 +220,6 @@ def run_fits_on_ray(
     )
     for ladder in ladders:
         report.rows += next(trained) if ladder.session in ready else [_not_ready(ladder)]
-
-
-def train(
-    report: BenchReport,
-    ladders: list[Ladder],
-    ready: dict[str, Path],
-    out: Path,
-    started: float,
-    args,
-) -> None:
-    """The ladders one at a time here, or as Ray tasks with ``--ray``."""
-    if args.ray:
-        run_fits_on_ray(report, ladders, ready, out, args)
-    else:
-        run_fits(report, ladders, ready, out, started, args)
 
 
 def _exit_on_sigterm(signum: int, frame) -> None:
@@ -292,11 +281,11 @@ def main(argv: list[str] | None = None, command: str | None = None) -> int:
     if main_session in ready:
         report.speed = run_speed_probe(ready[main_session], out / "logs")
         print(f"preset speed: {report.speed.error or report.speed.rays_per_s}")
-    train(report, list(plan.ladders), ready, out, started, args)
+    run_fits(report, list(plan.ladders), ready, out, started, args)
     matched = steps_matched_ladders(report)
     if matched:
         print(f"comparisons matched on steps: {len(matched)} more runs")
-        train(report, matched, ready, out, started, args)
+        run_fits(report, matched, ready, out, started, args)
     report.wall_s = time.monotonic() - started
     write_outputs(report, out)
     print(f"report: {out / 'report.md'} ({report.wall_s / 60:.1f} min)")
