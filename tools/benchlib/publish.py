@@ -17,6 +17,7 @@ __all__ = [
     "CLUSTER_END",
     "END",
     "RESULTS_FOLDER",
+    "as_published",
     "publish",
     "splice",
 ]
@@ -70,6 +71,10 @@ def publish(report: BenchReport, out: Path, document: Path) -> Path:
         shutil.copyfile(out / name, results / name)
     if (out / IMAGES_FOLDER).is_dir():
         shutil.copytree(out / IMAGES_FOLDER, results / IMAGES_FOLDER, dirs_exist_ok=True)
-    linked = dataclasses.replace(report, plot_name=f"{RESULTS_FOLDER}/{report.plot_name}")
-    document.write_text(splice(document.read_text(), render_markdown(linked)))
+    document.write_text(splice(document.read_text(), render_markdown(as_published(report))))
     return results
+
+
+def as_published(report: BenchReport) -> BenchReport:
+    """``report`` with its plot (and scene images) linked where :func:`publish` copies them."""
+    return dataclasses.replace(report, plot_name=f"{RESULTS_FOLDER}/{report.plot_name}")
