@@ -64,6 +64,7 @@ def render_outputs(
                 model, refined, data.intrinsics, data.image_size, exposures, data.monochrome
             ),
             data,
+            psnr_only=True,
         )
         metrics["test_poses"].update(
             registration,

@@ -12,33 +12,22 @@ from seenerf.eval.views import RenderedViews
 __all__ = ["format_scores", "score_views"]
 
 
-def score_views(views: RenderedViews, data: TrainingData) -> dict:
+def score_views(views: RenderedViews, data: TrainingData, *, psnr_only: bool = False) -> dict:
     """PSNR / SSIM of HDR (tone-mapped after one scale; per-channel and raw beside) and of LDR.
 
     The novel-exposure score is the mean over the bracket's second and fourth exposures (the
     paper's protocol). ``residual_blur`` measures how sharp the views at the bracket's middle
     exposure are. LPIPS is added per exposure only when its weights are on this machine;
-    ``lpips`` says which.
+    ``lpips`` says which. With ``psnr_only`` the HDR (one scale), LDR and novel-exposure PSNRs
+    alone, the SSIMs NaN: a second look at the same views from other poses.
     """
     test = data.test
     truth_hdr = list(test.hdr)
-    scores = {
-        "hdr": hdr_metrics(views.hdr, truth_hdr, align="global"),
-        "hdr_per_channel": hdr_metrics(views.hdr, truth_hdr, align="channel"),
-        "hdr_unaligned": hdr_metrics(views.hdr, truth_hdr, align="none"),
-        "log_contrast": log_contrast(np.stack(views.hdr), np.stack(truth_hdr)),
-        "ldr": {},
-    }
-    lpips, scores["lpips"] = lpips_scorer()
+    structural = not psnr_only
+    scores = {"hdr": hdr_metrics(views.hdr, truth_hdr, "global", structural), "ldr": {}}
     for index, exposure in enumerate(views.exposures_s):
         truth_ldr = list(test.ldr[:, index])
-        scores["ldr"][f"{exposure:g}"] = ldr_metrics(views.ldr[index], truth_ldr)
-        if lpips is not None:
-            scores["ldr"][f"{exposure:g}"]["lpips"] = float(
-                np.mean([lpips(p, t) for p, t in zip(views.ldr[index], truth_ldr, strict=True)])
-            )
-    middle = len(views.exposures_s) // 2
-    scores["residual_blur"] = residual_blur(views.ldr[middle], list(test.ldr[:, middle]))
+        scores["ldr"][f"{exposure:g}"] = ldr_metrics(views.ldr[index], truth_ldr, structural)
     novel = [
         scores["ldr"][f"{views.exposures_s[i]:g}"] for i in (1, 3) if i < len(views.exposures_s)
     ]
@@ -46,6 +35,20 @@ def score_views(views: RenderedViews, data: TrainingData) -> dict:
         "psnr": float(np.mean([m["psnr"] for m in novel])) if novel else float("nan"),
         "ssim": float(np.mean([m["ssim"] for m in novel])) if novel else float("nan"),
     }
+    if psnr_only:
+        return scores
+    scores["hdr_per_channel"] = hdr_metrics(views.hdr, truth_hdr, align="channel")
+    scores["hdr_unaligned"] = hdr_metrics(views.hdr, truth_hdr, align="none")
+    scores["log_contrast"] = log_contrast(np.stack(views.hdr), np.stack(truth_hdr))
+    lpips, scores["lpips"] = lpips_scorer()
+    for index, exposure in enumerate(views.exposures_s):
+        if lpips is not None:
+            truth_ldr = list(test.ldr[:, index])
+            scores["ldr"][f"{exposure:g}"]["lpips"] = float(
+                np.mean([lpips(p, t) for p, t in zip(views.ldr[index], truth_ldr, strict=True)])
+            )
+    middle = len(views.exposures_s) // 2
+    scores["residual_blur"] = residual_blur(views.ldr[middle], list(test.ldr[:, middle]))
     scores["render_s_per_view"] = views.render_s
     return scores
 

@@ -1,4 +1,5 @@
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -13,6 +14,8 @@ from seenerf.eval.metrics import (
     ssim,
     tone_map_pair,
 )
+from seenerf.eval.scores import score_views
+from seenerf.eval.views import RenderedViews
 
 
 def test_psnr_by_hand():
@@ -163,3 +166,24 @@ def test_training_curves_are_drawn_from_the_history(tmp_path):
 
 def _coloured_pixels(image):
     return int((image.max(-1) - image.min(-1) > 60).sum())
+
+
+def test_a_psnr_only_score_has_the_full_scores_psnrs_and_no_ssim():
+    rng = np.random.default_rng(5)
+    exposures = (0.01, 0.04, 0.15, 0.6, 2.4)
+    truth_hdr = rng.uniform(0.05, 4.0, (2, 24, 32, 3))
+    truth_ldr = np.clip(truth_hdr[:, None] * np.asarray(exposures)[None, :, None, None, None], 0, 1)
+    noisy = truth_hdr * rng.uniform(0.8, 1.2, truth_hdr.shape)
+    views = RenderedViews(
+        np.tile(np.eye(4), (2, 1, 1)),
+        exposures,
+        list(noisy),
+        [list(np.clip(noisy * e, 0, 1)) for e in exposures],
+    )
+    data = SimpleNamespace(test=SimpleNamespace(hdr=truth_hdr, ldr=truth_ldr))
+    full, light = score_views(views, data), score_views(views, data, psnr_only=True)
+    assert light["hdr"]["psnr"] == full["hdr"]["psnr"] and math.isnan(light["hdr"]["ssim"])
+    # Novel exposures: the mean of the 2nd and 4th (0.04 s and 0.6 s).
+    novel = (full["ldr"]["0.04"]["psnr"] + full["ldr"]["0.6"]["psnr"]) / 2
+    assert light["novel_exposure"]["psnr"] == pytest.approx(novel) == full["novel_exposure"]["psnr"]
+    assert 0 < full["hdr"]["ssim"] < 1 and "residual_blur" not in light
