@@ -342,3 +342,17 @@ def test_comparisons_are_matched_on_steps_as_well_as_on_time():
     assert "- full > base: holds on steps (24.00 vs 21.00 dB), reversed on time" in text
     # The run ended at 1000 steps is not the 40 s row of the time-matched reading.
     assert {c[0]: c[1] for c in target_checks(report)}["full − base, HDR PSNR dB"] == "-1.00"
+
+
+@pytest.mark.parametrize(
+    ("options", "words"),
+    [
+        ("", "one at a time, with every core"),
+        (" --threads 2", "one at a time, 2 torch threads each"),
+        (" --ray local", "Ray tasks side by side, one core and one torch thread each"),
+    ],
+)
+def test_the_report_says_how_the_fits_shared_the_machine(options, words):
+    report = report_with([])
+    report.command += options
+    assert f"Each training run is its own process ({words});" in render_markdown(report)
