@@ -79,7 +79,7 @@ def test_target_checks_read_the_table_budget_runs():
     assert checks["room: full novel-exposure PSNR dB"] == ["33.00", ">= 30", "met"]
     assert checks["room: oracle − full HDR PSNR dB"] == [DASH, "<= 3", "not measured"]
     assert checks["rays/s, fast ÷ paper (same process)"] == ["200.00", ">= 100", "met"]
-    assert checks["fast: render one view, s"] == ["0.50", "<= 1", "met"]
+    assert checks["room: full: render one view, s"] == ["0.50", "<= 1", "met"]
 
 
 def test_empty_report_renders_with_nothing_measured(tmp_path):
@@ -96,7 +96,7 @@ def test_empty_report_renders_with_nothing_measured(tmp_path):
     assert saved["rows"] == [] and saved["plan"]["quick"] is True
     assert saved["commit"] == "0123456789abcdef"
     assert [v["summary"] for v in saved["verdicts"]] == ["not measured"] * 5
-    assert len(saved["targets"]) == 4
+    assert len(saved["targets"]) == 3
 
 
 def test_json_keeps_nan_and_rows(tmp_path):
