@@ -41,12 +41,11 @@ def score_views(views: RenderedViews, data: TrainingData, *, psnr_only: bool = F
     scores["hdr_unaligned"] = hdr_metrics(views.hdr, truth_hdr, align="none")
     scores["log_contrast"] = log_contrast(np.stack(views.hdr), np.stack(truth_hdr))
     lpips, scores["lpips"] = lpips_scorer()
-    for index, exposure in enumerate(views.exposures_s):
-        if lpips is not None:
-            truth_ldr = list(test.ldr[:, index])
-            scores["ldr"][f"{exposure:g}"]["lpips"] = float(
-                np.mean([lpips(p, t) for p, t in zip(views.ldr[index], truth_ldr, strict=True)])
-            )
+    for index, exposure in enumerate(views.exposures_s if lpips is not None else ()):
+        truth_ldr = list(test.ldr[:, index])
+        scores["ldr"][f"{exposure:g}"]["lpips"] = float(
+            np.mean([lpips(p, t) for p, t in zip(views.ldr[index], truth_ldr, strict=True)])
+        )
     middle = len(views.exposures_s) // 2
     scores["residual_blur"] = residual_blur(views.ldr[middle], list(test.ldr[:, middle]))
     scores["render_s_per_view"] = views.render_s

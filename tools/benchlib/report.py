@@ -33,7 +33,6 @@ __all__ = [
     "scene_sessions",
     "seed_scores",
     "steps_matched_ladders",
-    "steps_matched_rows",
     "target_checks",
     "tie_limit",
     "write_json",
@@ -144,14 +143,10 @@ def judge_all(report: BenchReport) -> list[ComparisonVerdict]:
     ]
 
 
-def steps_matched_rows(
-    report: BenchReport, comparison: Comparison
-) -> tuple[int, dict[str, RunRow | None]]:
-    """The fewest steps a row of ``comparison`` trained at the table budget, and each row's run
-    at that count (:func:`benchlib.matching.matched_row`)."""
+def _timed_rows(report: BenchReport, comparison: Comparison) -> tuple[dict, int]:
+    """The comparison's time-matched rows and the fewest steps any of them trained."""
     rows = comparison_rows(report, comparison.axis, list(comparison.rows))
-    steps = common_steps(rows.values())
-    return steps, {key: matched_row(row, report.rows, steps) for key, row in rows.items()}
+    return rows, common_steps(rows.values())
 
 
 def steps_matched_ladders(report: BenchReport) -> list[Ladder]:
@@ -159,8 +154,7 @@ def steps_matched_ladders(report: BenchReport) -> list[Ladder]:
     its comparison's fewest steps, ended at that count."""
     ladders = []
     for comparison in COMPARISONS:
-        rows = comparison_rows(report, comparison.axis, list(comparison.rows))
-        steps = common_steps(rows.values())
+        rows, steps = _timed_rows(report, comparison)
         for row in rows.values():
             ladder = matched_ladder(row, steps) if needs_matching(row, steps) else None
             if ladder and ladder not in ladders:
@@ -170,11 +164,11 @@ def steps_matched_ladders(report: BenchReport) -> list[Ladder]:
 
 def _steps_lines(report: BenchReport, by_time: ComparisonVerdict) -> list[str]:
     """The comparison matched on steps, and each ordering that reads otherwise than on time."""
-    steps, rows = steps_matched_rows(report, by_time.comparison)
+    timed, steps = _timed_rows(report, by_time.comparison)
+    rows = {key: matched_row(row, report.rows, steps) for key, row in timed.items()}
     by_steps = judge(by_time.comparison, rows, tie_limit(report))
     if by_steps.summary == "not measured":
         return []
-    timed = comparison_rows(report, by_time.comparison.axis, list(rows))
     again = [key for key, row in timed.items() if needs_matching(row, steps)]
     lines = [
         f"Matched on steps: every row at {steps} steps, the fewest any row trained in "
@@ -184,17 +178,15 @@ def _steps_lines(report: BenchReport, by_time: ComparisonVerdict) -> list[str]:
         "",
     ]
     on_time = {(c.claim.better, c.claim.worse): c.outcome for c in by_time.claims}
-    differ = [
-        c
-        for c in by_steps.claims
-        if "not measured" not in (c.outcome, on_time[c.claim.better, c.claim.worse])
-        and c.outcome != on_time[c.claim.better, c.claim.worse]
-    ]
-    lines += [
-        f"- {c.claim.better} > {c.claim.worse}: {c.outcome} on steps ({c.better_db:.2f} vs "
-        f"{c.worse_db:.2f} dB), {on_time[c.claim.better, c.claim.worse]} on time"
-        for c in differ
-    ] or ["Every ordering measured both ways reads the same on steps as on time."]
+    for c in by_steps.claims:
+        before = on_time[c.claim.better, c.claim.worse]
+        if c.outcome != before and "not measured" not in (c.outcome, before):
+            lines.append(
+                f"- {c.claim.better} > {c.claim.worse}: {c.outcome} on steps "
+                f"({c.better_db:.2f} vs {c.worse_db:.2f} dB), {before} on time"
+            )
+    if len(lines) == 2:
+        lines.append("Every ordering measured both ways reads the same on steps as on time.")
     return [*lines, ""]
 
 
