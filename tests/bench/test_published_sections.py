@@ -5,7 +5,17 @@ from pathlib import Path
 
 import pytest
 from benchlib.blind import blind_report
-from benchlib.publish import BLIND_BEGIN, BLIND_END, CLUSTER_BEGIN, CLUSTER_END
+from benchlib.publish import (
+    BEGIN,
+    BLIND_BEGIN,
+    BLIND_END,
+    CLUSTER_BEGIN,
+    CLUSTER_END,
+    END,
+    as_published,
+)
+from benchlib.readback import report_from_json
+from benchlib.report import render_markdown
 from benchlib.side_by_side import side_by_side_report
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -27,3 +37,8 @@ def _section(begin: str, end: str) -> str:
 def test_a_generated_section_holds_what_its_results_file_renders_to(name, render, begin, end):
     document = json.loads((ROOT / "bench-results" / name).read_text())
     assert _section(begin, end) == render(document).strip()
+
+
+def test_the_main_section_holds_what_results_json_renders_to():
+    report = report_from_json(ROOT / "bench-results" / "results.json")
+    assert _section(BEGIN, END) == render_markdown(as_published(report)).strip()

@@ -499,7 +499,7 @@ def render_markdown(report: BenchReport) -> str:
         "",
         f"Command: `{report.command}` ({'quick' if plan.quick else 'full'} mode) at commit "
         f"{report.commit[:12]}, started {report.started_utc}, {report.wall_s / 60:.1f} min wall "
-        "in total.",
+        "for this invocation.",
         "",
         f"Machine: {report.machine.line()}.",
         "",
