@@ -25,6 +25,7 @@ from davis_io.calibration.response_fit import (
     linear_fit,
     place_knots,
 )
+from davis_io.calibration.scale import common_scale
 from davis_io.errors import UsageError
 from davis_io.session.calibration import SensorCalibration
 
@@ -190,6 +191,8 @@ def calibrate_frames(
     every = everything.at(latency, factors)
     theta, problem = _fit_with_factors(subset, every, theta, 2, progress)
     spread = _split_half_spread(recording, subset, every, theta, levels)
+    scale = common_scale(problem, theta, progress)
+    theta, spread = scale.theta, np.maximum(spread, scale.theta * scale.width)
     residual, response = problem.solve(*theta)
     pile_up = levels.black_level if levels.black_level > 0 else None
     black, power, straightness = linear_fit(response, pile_up)
@@ -216,8 +219,10 @@ def calibrate_frames(
         pixel_factor_off=every.factor_off.reshape(height, width).astype(np.float32),
         residual_events=float(np.sqrt(np.mean(residual**2)) / (0.5 * theta.sum())),
         pairs=problem.pairs,
-        source="measured",
+        source="measured" if scale.measured else "measured ratio, nominal scale",
         method="frame/event consistency of consecutive exposures (blur integral, free "
-        "inverse response, per-pixel factors), latency profiled; uncertainty: split-half "
-        "spread over the pixels; dead time: 1st percentile of a pixel's event intervals",
+        "inverse response, per-pixel factors), latency profiled, the common scale "
+        f"{'pinned by the blur' if scale.measured else 'nominal: the blur does not pin it'}; "
+        "uncertainty: split-half spread over the pixels (and the profile's width where the "
+        "scale is nominal); dead time: 1st percentile of a pixel's event intervals",
     )

@@ -40,14 +40,15 @@ def _texture(rng: np.random.Generator, length: int) -> np.ndarray:
 
 
 def synthetic_recording(
-    sensor: KnownSensor, frames: int = 8, seed: int = 0
+    sensor: KnownSensor, frames: int = 8, seed: int = 0, exposure_us: int = 60_000
 ) -> tuple[CalibrationInput, np.ndarray, np.ndarray]:
     """The recording, and each pixel's true ON and OFF thresholds ``(H, W)``.
 
-    Frames expose for 60 ms every 100 ms; the texture slides 0.25 px per ms with a sway.
+    Frames expose for ``exposure_us`` (at most 90 ms) every 100 ms; the texture slides
+    0.25 px per ms with a sway.
     """
     rng = np.random.default_rng(seed)
-    exposure_us, interval_us = 60_000, 100_000
+    interval_us = 100_000
     end_us = frames * interval_us
     times = np.arange(0, end_us + STEP_US, STEP_US)
     shift = 0.25e-3 * times + 6.0 * np.sin(times * 2e-5)

@@ -38,6 +38,7 @@ def test_thresholds_of_each_polarity_are_recovered_whatever_the_response(calibra
     ratio = calibration.threshold_off / calibration.threshold_on
     assert ratio == pytest.approx(true_off / true_on, rel=0.03)
     assert 0 < calibration.threshold_on_sd < 0.02 and calibration.source == "measured"
+    assert "pinned by the blur" in calibration.method
 
 
 def test_the_linear_response_is_told_apart_and_its_levels_found(calibrated):
@@ -81,3 +82,17 @@ def test_late_events_are_measured_as_late():
     on_time, delayed = calibrate_frames(recording), calibrate_frames(late)
     assert delayed.latency_us - on_time.latency_us == pytest.approx(5000, abs=1000)
     assert delayed.threshold_on == pytest.approx(on_time.threshold_on, rel=0.03)
+
+
+def test_frames_too_sharp_for_the_scale_keep_the_measured_ratio_at_the_nominal_scale():
+    # A 4 ms exposure barely blurs: the free response absorbs any common scale of the
+    # thresholds (unguarded, the fit ran to its floor of 0.01). The ratio stays measurable.
+    sensor = KnownSensor(0.25, 0.35, 0.02, FAMILIES["film"])
+    recording, theta_on, theta_off = synthetic_recording(sensor, exposure_us=4_000)
+    calibration = calibrate_frames(recording)
+    assert calibration.source == "measured ratio, nominal scale"
+    assert np.sqrt(calibration.threshold_on * calibration.threshold_off) == pytest.approx(0.3)
+    ratio = calibration.threshold_off / calibration.threshold_on
+    assert ratio == pytest.approx(np.median(theta_off) / np.median(theta_on), rel=0.03)
+    # The profile is flat over a factor of two or more: the stated uncertainty says so.
+    assert calibration.threshold_on_sd > 0.4 * calibration.threshold_on

@@ -1,0 +1,24 @@
+"""The thresholds' common scale counts as measured only where the disagreement rises."""
+
+import numpy as np
+import pytest
+
+from davis_io.calibration.scale import SCALES, ScaleProfile
+
+
+def _profile(rise_per_octave: float) -> ScaleProfile:
+    return ScaleProfile(SCALES, rise_per_octave * np.log2(SCALES) ** 2)
+
+
+def test_a_rise_of_five_percent_within_a_factor_of_root_two_pins_the_scale():
+    # At x0.71 and x1.41 (half an octave) the rise is a quarter of the rise per octave.
+    pinned = _profile(0.2)
+    assert pinned.pinned
+    assert pinned.interval == pytest.approx((SCALES[3], SCALES[5]))
+
+
+def test_a_flat_profile_leaves_the_scale_free_and_says_how_wide():
+    free = _profile(0.02)  # +0.5 % at x1.41, +1.1 % at x1.68, +2 % at x2
+    assert not free.pinned
+    assert free.interval == pytest.approx((SCALES[1], SCALES[7]))
+    assert "x2.00: +2.0 %" in free.describe()
