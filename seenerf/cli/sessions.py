@@ -12,6 +12,7 @@ from davis_io.prepare import prepare_session
 from seenerf.errors import TrainingStopped
 from seenerf.model.config import FitConfig
 from seenerf.train.fit import FitResult, fit_session, session_bins
+from seenerf.train.threads import limit_threads
 from seenerf.train.trainer import Trainer
 
 __all__ = ["SessionFit", "fit_kept_apart", "prepare_and_fit", "score_table"]
@@ -44,6 +45,7 @@ def prepare_and_fit(
     on_step: Callable[[Trainer], None] | None = None,
 ) -> FitResult:
     """Calibrate the sensor and estimate poses when missing, then fit (the budget counts both)."""
+    limit_threads(config.threads)
     spent_s = prepare_session(session_dir, session_bins(session_dir, config), log)
     return fit_session(
         session_dir,

@@ -52,7 +52,7 @@ class FitConfig:
         validation_share: fraction of training pixels held out for the progress PSNR.
         exposures_s: exposures of the rendered LDR brackets (empty: the truth's or the
             paper's five).
-        threads: torch CPU threads (0: torch's default).
+        threads: CPU threads of each pool: torch's, numpy's BLAS, OpenCV's (0: their defaults).
         batch_pixels: blurry pixels per step (0: the preset's).
         warm_steps: CRF warm-start steps (-1: the preset's, the reference's 500).
         register_test_views: before scoring a fit made from estimated poses, refine each

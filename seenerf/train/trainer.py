@@ -28,6 +28,7 @@ from seenerf.train.losses import (
     total_loss,
 )
 from seenerf.train.stopping import StopRequest, stop_requests
+from seenerf.train.threads import limit_threads
 
 __all__ = ["TrainSummary", "Trainer", "TrainingProgress"]
 
@@ -109,8 +110,7 @@ class Trainer:
     ):
         self.data, self.config, self.run_dir, self.log = data, config.validate(), run_dir, log
         self.on_step = on_step
-        if config.threads > 0:
-            torch.set_num_threads(config.threads)
+        limit_threads(config.threads)
         self.device = resolve_device(config.device)
         torch.manual_seed(config.seed)
         self.model, preset = build_model(data, config, self.device)
