@@ -2,10 +2,11 @@
 
 Frame/event consistency fixes the ratio of the ON and OFF thresholds in any recording, but
 their common scale only where something breaks the symmetry of scaling the thresholds and the
-free inverse response together: a known response shape (a linear APS), or blur (frames
-integrate linear intensity, so only the right contrast mixes bright and dark at a blurred edge
-as the frame did). Short exposures leave the scale free: the disagreement is then flat along
-it, and the minimiser wanders (to twice the truth, or to nothing).
+free inverse response together. A known response shape would, but the shape cannot be told
+without the scale (a gamma curve is a power law in the dark, as straight in log-log as a linear
+APS). Blur does: frames integrate linear intensity, so only the right contrast mixes bright and
+dark at a blurred edge as the frame did. Short exposures leave the scale free: the disagreement
+is then flat along it, and the minimiser wanders (to twice the truth, or to nothing).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from davis_io.session.defaults import DEFAULT_THRESHOLD
 __all__ = ["SCALES", "CommonScale", "ScaleProfile", "common_scale", "scale_profile"]
 
 SCALES = np.geomspace(0.5, 2.0, 9)
-"""Common scales of the thresholds the profile tries (the fit's own at the middle)."""
+"""Common scales of the thresholds the profile tries (the fit's own, 1, at the middle)."""
 
 PINNED_RISE = 0.02
 """The disagreement must rise by this fraction (of its value at the fit) within a factor of
@@ -63,8 +64,8 @@ class ScaleProfile:
 
 def scale_profile(problem: ConsistencyProblem, theta: np.ndarray) -> ScaleProfile:
     """The disagreement of ``problem`` with both thresholds scaled, the response re-solved."""
-    at_fit = problem.disagreement(*theta)
-    rise = np.array([problem.disagreement(*(s * theta)) / at_fit - 1 for s in SCALES])
+    disagreement = np.array([problem.disagreement(*(scale * theta)) for scale in SCALES])
+    rise = disagreement / disagreement[len(SCALES) // 2] - 1
     return ScaleProfile(SCALES.copy(), np.maximum(rise, 0.0))
 
 

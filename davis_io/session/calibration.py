@@ -61,8 +61,8 @@ class SensorCalibration:
         pixel_factor_off: the same for OFF.
         residual_events: RMS disagreement of frames and events after the fit, in events.
         pairs: consecutive-frame pixel pairs the fit used.
-        source: ``measured``, ``measured ratio, nominal scale`` (frames too sharp and response
-            not linear: the thresholds' ratio and pixel factors are measured, their common
+        source: ``measured``, ``measured ratio, nominal scale`` (frames too sharp for the blur
+            to pin the scale: the thresholds' ratio and pixel factors are measured, their common
             scale is :data:`~davis_io.session.DEFAULT_THRESHOLD`), ``given``, ``truth`` or
             ``default`` (nothing could be measured).
         method: one line saying how the values were found.
