@@ -2,6 +2,7 @@
 
     python tools/bench_blind.py [--out bench-out/blind] [--budget 600] [--sessions room-s10 ...]
                                 [--fresh] [--jobs 2] [--ray ADDRESS] [--publish]
+                                [--render-only]
 
 For every session of :data:`benchlib.blind.BLIND_SESSIONS`: record it with a random sensor, fit
 ``full`` end to end (calibration and poses included) with the budget, then ``white-box`` (the
@@ -9,7 +10,9 @@ sensor's true values) and ``oracle`` for as long as ``full`` trained; score all 
 fit's own protocol. Kept sessions and runs are read back (``--fresh`` redoes them). Writes
 ``OUT/blind.json`` and ``OUT/blind.md`` after every session; about 35 minutes per session on
 2 cores. ``--publish`` then copies ``blind.json`` to ``bench-results/`` and splices the report
-into BENCHMARKS.md between its blind-benchmark markers.
+into BENCHMARKS.md between its blind-benchmark markers; ``--render-only`` prints (and with
+``--publish`` publishes) ``OUT/blind.json`` as the run left it, fitting nothing. The commit,
+command and machine stated are those at the run's start.
 """
 
 from __future__ import annotations
@@ -47,6 +50,11 @@ def main(argv: list[str] | None = None) -> int:
         "--publish", action="store_true", help="copy the results into the repository's report"
     )
     parser.add_argument(
+        "--render-only",
+        action="store_true",
+        help="report OUT/blind.json as the last run left it, fitting nothing",
+    )
+    parser.add_argument(
         "--jobs",
         type=int,
         default=1,
@@ -61,11 +69,37 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     args.out = args.out.resolve()  # Ray's workers run in other folders
+    if args.render_only:
+        document = json.loads((args.out / "blind.json").read_text())
+    else:
+        document = _run_sessions(args)
+    print(blind_report(document))
+    if args.publish:
+        results = ROOT / RESULTS_FOLDER
+        results.mkdir(exist_ok=True)
+        (results / "blind.json").write_text(json.dumps(document, indent=1, default=str))
+        report = ROOT / "BENCHMARKS.md"
+        report.write_text(
+            splice(report.read_text(), blind_report(document), BLIND_BEGIN, BLIND_END)
+        )
+    return 0
+
+
+def _run_sessions(args: argparse.Namespace) -> dict:
+    """Record, fit and score the chosen sessions; ``OUT/blind.json`` after each one."""
     chosen = [s for s in BLIND_SESSIONS if s.key in args.sessions]
     threads = max(1, (os.cpu_count() or 1) // args.jobs)
     if args.jobs > 1:
         os.environ["OMP_NUM_THREADS"] = str(threads)  # the children's torch threads
     start, done = time.time(), {}
+    header = {  # as at the start: edits made while it runs are not what it measured
+        "commit": source_commit(),
+        "command": exact_command(),
+        "machine": describe_machine().line(),
+        "budget_s": args.budget,
+        "jobs": args.jobs,
+        "threads_per_fit": threads,
+    }
 
     def run(spec):
         return spec.key, run_blind_session(spec, args.out, args.budget, fresh=args.fresh)
@@ -80,27 +114,13 @@ def main(argv: list[str] | None = None) -> int:
         for key, row in finished:
             done[key] = row
             document = {
-                "commit": source_commit(),
-                "command": exact_command(),
-                "machine": describe_machine().line(),
-                "budget_s": args.budget,
-                "jobs": args.jobs,
-                "threads_per_fit": threads,
+                **header,
                 "wall_s": time.time() - start,
                 "rows": rows_to_json([done[s.key] for s in chosen if s.key in done]),
             }
             (args.out / "blind.json").write_text(json.dumps(document, indent=1, default=str))
             (args.out / "blind.md").write_text(blind_report(document) + "\n")
-    print(blind_report(document))
-    if args.publish:
-        results = ROOT / RESULTS_FOLDER
-        results.mkdir(exist_ok=True)
-        (results / "blind.json").write_text(json.dumps(document, indent=1, default=str))
-        report = ROOT / "BENCHMARKS.md"
-        report.write_text(
-            splice(report.read_text(), blind_report(document), BLIND_BEGIN, BLIND_END)
-        )
-    return 0
+    return document
 
 
 if __name__ == "__main__":

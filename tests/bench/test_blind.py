@@ -1,6 +1,10 @@
+import json
 import math
+from pathlib import Path
 
 from benchlib.blind import BLIND_SESSIONS, BlindRow, blind_rows_markdown, blind_targets
+
+ROOT = Path(__file__).resolve().parents[2]
 
 SENSOR = {
     "color_filter": "mono",
@@ -79,3 +83,14 @@ def test_the_plan_has_six_sessions_over_three_scenes_two_of_them_mono_at_least()
     clean = [s.dvs.refractory_us == 0 and s.dvs.cutoff_hz > 1000 for s in sensors]
     assert sum(clean) >= 2  # where the threshold target applies
     assert {s.response.family for s in sensors} == {"linear", "reinhard_gamma", "film", "s_curve"}
+
+
+def test_render_only_reports_the_runs_own_header_and_fits_nothing(tmp_path, capsys):
+    import bench_blind  # tools/, on the path by conftest
+
+    document = json.loads((ROOT / "bench-results" / "blind.json").read_text())
+    document["commit"] = "0123abcd"  # not this checkout's: the run's own must be kept
+    (tmp_path / "blind.json").write_text(json.dumps(document))
+    assert bench_blind.main(["--out", str(tmp_path), "--render-only"]) == 0
+    assert "At commit `0123abcd`" in capsys.readouterr().out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blind.json"]
