@@ -1,15 +1,20 @@
 """How much of the true log-intensity change an emulated session's events carry, and how late.
 
     python tools/event_contrast.py SESSION [--bins 4] [--frames 3] [--threshold THETA]
-        [--latency-ms MS | --scan-latency]
+        [--latency-ms MS | --scan-latency] [--calibration measured|truth]
 
 For an emulated session, renders (noise-free) what each pixel sees at the latent time points of
 a few exposures and compares the true change of ln intensity over each bin with the change the
 bin's events imply (calibrated counts times the contrast threshold: by default the mean of the
 median pixel's true ON and OFF thresholds, from the session's truth). Over the pixels whose
 true change exceeds the threshold it prints the median ratio of the two, the least-squares slope
-of the event change on the true one, and their correlation. A ratio under 1 means the events
-undercount contrast.
+of the event change on the true one (also for rises and falls apart), and their correlation. A
+ratio under 1 means the events undercount contrast.
+
+``--calibration`` reads the bins as a fit does instead (``Session.contrast_bins``: events in
+light time, each weighing its pixel's threshold), with the session's measured calibration or the
+sensor's true values: what the fit's event loss is given. A slope under 1 with both is the
+pixel; under 1 with the measured values alone is the calibration (its latency, mostly).
 
 Events come late: a pixel's photoreceptor low-pass lags in the dark, and its refractory period
 lets a strong edge out at only one event per dead time, so the counts of a bin describe a change
@@ -26,7 +31,7 @@ import numpy as np
 
 from davis_io.emulator import EmulatedCamera
 from davis_io.emulator.dvs import lin_log
-from davis_io.session import DEFAULT_BINS, Session
+from davis_io.session import DEFAULT_BINS, SensorCalibration, Session
 
 SCANNED_LATENCIES_MS = tuple(range(0, 17, 2))
 
@@ -37,6 +42,7 @@ def log_changes(
     frames: int,
     threshold: float | None,
     latencies_us: tuple[int, ...] = (0,),
+    calibration: SensorCalibration | None = None,
 ):
     """True and event-implied ln-intensity changes per bin of ``frames`` exposures, flattened.
 
@@ -45,13 +51,15 @@ def log_changes(
     Args:
         latencies_us: for each, the true change is taken over each bin's time span moved this
             much earlier.
+        calibration: read the bins as a fit does (in light time, in ln units) with these
+            sensor values, instead of the stored counts times ``threshold``.
 
     Returns:
         The true changes ``(len(latencies_us), N)``, the implied ones ``(N,)``, and the
-        threshold used.
+        threshold (the true one unless given: the floor of :func:`agreement`).
     """
     with Session.open(session_dir) as session:
-        bins = session.bins(b)
+        bins = session.bins(b) if calibration is None else session.contrast_bins(b, calibration)
         sensor = session.truth().sensor
     camera = EmulatedCamera.of_session(session_dir)
     threshold = threshold or 0.5 * (sensor["median_threshold_on"] + sensor["median_threshold_off"])
@@ -69,20 +77,38 @@ def log_changes(
             )
             changes.append(np.diff(seen, axis=0).ravel())
         true.append(np.concatenate(changes))
-    implied = np.concatenate([threshold * bins.calibrated[frame].ravel() for frame in chosen])
+    unit = threshold if calibration is None else 1.0
+    implied = np.concatenate([unit * bins.calibrated[frame].ravel() for frame in chosen])
     return np.stack(true), implied, threshold
 
 
+def _slope(true: np.ndarray, implied: np.ndarray) -> float:
+    return float((true @ implied) / (true @ true)) if len(true) else float("nan")
+
+
 def agreement(true: np.ndarray, implied: np.ndarray, threshold: float) -> dict:
-    """Median ratio, slope and correlation where the true change exceeds ``threshold``."""
+    """Median ratio, slopes (all, rises, falls) and correlation where ``|true| > threshold``."""
     moved = np.abs(true) > threshold
     true, implied = true[moved], implied[moved]
     return {
         "pixels": int(moved.sum()),
         "ratio": float(np.median(implied / true)),
-        "slope": float((true @ implied) / (true @ true)),
+        "slope": _slope(true, implied),
+        "slope_rise": _slope(true[true > 0], implied[true > 0]),
+        "slope_fall": _slope(true[true < 0], implied[true < 0]),
         "correlation": float(np.corrcoef(true, implied)[0, 1]),
     }
+
+
+def sensor_values(session_dir: Path, source: str) -> SensorCalibration:
+    """The session's measured calibration (``measured``) or its sensor's true values."""
+    with Session.open(session_dir) as session:
+        if source == "truth":
+            return session.truth().sensor_calibration()
+        calibration = session.calibration()
+    if calibration is None:
+        raise SystemExit(f"{session_dir}: not calibrated yet; run seecap calibrate first")
+    return calibration
 
 
 def main() -> None:
@@ -94,6 +120,11 @@ def main() -> None:
     latency = parser.add_mutually_exclusive_group()
     latency.add_argument("--latency-ms", type=float, default=0.0, help="event latency assumed")
     latency.add_argument("--scan-latency", action="store_true", help="try 0 to 16 ms")
+    parser.add_argument(
+        "--calibration",
+        choices=("measured", "truth"),
+        help="read the bins as a fit does, with the measured or the true sensor values",
+    )
     args = parser.parse_args()
     latencies = SCANNED_LATENCIES_MS if args.scan_latency else (args.latency_ms,)
     true, implied, threshold = log_changes(
@@ -102,6 +133,7 @@ def main() -> None:
         args.frames,
         args.threshold,
         tuple(round(latency_ms * 1000) for latency_ms in latencies),
+        sensor_values(args.session, args.calibration) if args.calibration else None,
     )
     results = []
     for latency_ms, true_changes in zip(latencies, true, strict=True):
@@ -110,8 +142,8 @@ def main() -> None:
         print(
             f"latency {latency_ms:g} ms: {found['pixels']} pixels whose ln intensity changed by "
             f"more than {threshold:g} in a bin; event / true change: median ratio "
-            f"{found['ratio']:.3f}, slope {found['slope']:.3f}, correlation "
-            f"{found['correlation']:.3f}"
+            f"{found['ratio']:.3f}, slope {found['slope']:.3f} (rises {found['slope_rise']:.3f}, "
+            f"falls {found['slope_fall']:.3f}), correlation {found['correlation']:.3f}"
         )
     if args.scan_latency:
         print(f"the events agree best with the true changes {max(results)[1]:g} ms earlier")

@@ -69,6 +69,10 @@ def test_a_lagging_pixel_is_not_held_to_the_threshold_target_and_missing_runs_ar
     assert "lamp-s2" in table and "30.00" in table and "mono, linear" in table
     # The bracket is listed shortest exposure first, whatever the order of the keys.
     assert "| lamp-s2 | full | 31.00 | 30.00 | 29.00 | 26.00 | 24.00 |" in table
+    # The events' share of the contrast is not measured for this row; with it, both readings.
+    assert "| lamp-s2 | mono, linear" in table and "| - |" in table
+    row.event_contrast = {"measured": 0.634, "true": 0.886}
+    assert "| 0.63 / 0.89 |" in blind_rows_markdown([row])
 
 
 def test_the_plan_has_six_sessions_over_three_scenes_two_of_them_mono_at_least():

@@ -1,6 +1,6 @@
 import numpy as np
 import pytest
-from event_contrast import agreement, log_changes
+from event_contrast import agreement, log_changes, sensor_values
 
 from davis_io.emulator import EmulatedCamera
 from davis_io.session.recorder import record
@@ -55,3 +55,27 @@ def test_agreement_of_a_known_pair():
     assert found["pixels"] == 3  # 0.1 is under the threshold
     assert np.isclose(found["ratio"], 0.5) and np.isclose(found["slope"], 0.5)
     assert np.isclose(found["correlation"], 1.0)
+
+
+def test_rises_and_falls_get_slopes_of_their_own():
+    true = np.array([1.0, -2.0, 3.0, -1.0])
+    found = agreement(true, np.where(true > 0, 0.8 * true, 1.2 * true), 0.3)
+    assert found["slope_rise"] == pytest.approx(0.8)
+    assert found["slope_fall"] == pytest.approx(1.2)
+    # sum(implied * true) = 0.8 + 4.8 + 7.2 + 1.2 = 14 over sum(true^2) = 15.
+    assert found["slope"] == pytest.approx(14 / 15)
+
+
+def test_bins_read_as_a_fit_reads_them_carry_an_ideal_pixels_contrast(tmp_path):
+    def slope(preset):
+        folder = recorded(tmp_path / preset, preset)
+        true, implied, threshold = log_changes(
+            folder, 4, 2, None, calibration=sensor_values(folder, "truth")
+        )
+        return agreement(true[0], implied, threshold)["slope"]
+
+    # In light time, each event its pixel's true threshold: only quantisation is lost.
+    clean = slope("clean")
+    assert 0.88 < clean < 1.05
+    # The noisy preset's refractory period and low-pass lose a third, whatever the calibration.
+    assert slope("noisy") < clean - 0.15

@@ -21,11 +21,13 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from event_contrast import agreement, log_changes
+
 from benchlib.numbers import fmt
 from benchlib.plan import METHOD
 from benchlib.runner import python_command, run_measured
 from benchlib.tables import markdown_table
-from davis_io.session import Session
+from davis_io.session import DEFAULT_BINS, SensorCalibration, Session
 
 __all__ = [
     "BLIND_SESSIONS",
@@ -41,6 +43,8 @@ __all__ = [
 VARIANTS = (METHOD, "white-box", "oracle")
 EXPOSURE_S = 0.15
 TIMEOUT_S = 3600.0
+CONTRAST_FRAMES = 3
+"""Exposures whose bins are compared with the true log change (``tools/event_contrast.py``)."""
 
 
 @dataclass(frozen=True)
@@ -84,6 +88,8 @@ class BlindRow:
             poses, training, renders, scores).
         record_s: wall time of the recording.
         errors: variant -> what failed.
+        event_contrast: slope of the fit's event bins on the true ln change per bin, read with
+            the ``measured`` calibration and with the sensor's ``true`` values.
     """
 
     key: str
@@ -93,6 +99,7 @@ class BlindRow:
     end_to_end_s: float = math.nan
     record_s: float = math.nan
     errors: dict = field(default_factory=dict)
+    event_contrast: dict = field(default_factory=dict)
 
     @property
     def clean_pixel(self) -> bool:
@@ -140,6 +147,11 @@ def row_from_runs(key: str, session_dir: Path, timings: dict) -> BlindRow:
         calibration = session.calibration()
     row.sensor = truth.sensor if truth is not None else {}
     row.calibration = calibration.facts() if calibration is not None else {}
+    if truth is not None and calibration is not None:
+        row.event_contrast = {
+            "measured": _event_contrast(session_dir, calibration),
+            "true": _event_contrast(session_dir, truth.sensor_calibration()),
+        }
     for variant in VARIANTS:
         path = session_dir / "fit" / f"blind-{variant}" / "metrics.json"
         if path.exists():
@@ -147,6 +159,14 @@ def row_from_runs(key: str, session_dir: Path, timings: dict) -> BlindRow:
         else:
             row.errors.setdefault(variant, "no metrics.json")
     return row
+
+
+def _event_contrast(session_dir: Path, calibration: SensorCalibration) -> float:
+    """How much of the true ln change the bins carry when read with ``calibration``."""
+    true, implied, threshold = log_changes(
+        session_dir, DEFAULT_BINS, CONTRAST_FRAMES, None, calibration=calibration
+    )
+    return agreement(true[0], implied, threshold)["slope"]
 
 
 def _fit(session_dir: Path, variant: str, budget_s: float, log_dir: Path, fresh: bool):
@@ -269,6 +289,11 @@ def _measured_cell(row: BlindRow) -> str:
     )
 
 
+def _event_contrast_cell(row: BlindRow) -> str:
+    found = row.event_contrast
+    return f"{fmt(found['measured'], 2)} / {fmt(found['true'], 2)}" if found else "-"
+
+
 def _gap(row: BlindRow, variant: str, measure: str) -> str:
     full, other = row.scores.get(METHOD), row.scores.get(variant)
     return fmt(other[measure] - full[measure]) if full and other else "-"
@@ -284,7 +309,7 @@ def _bracket(row: BlindRow, variant: str) -> list[str]:
 
 def blind_rows_markdown(rows: list[BlindRow]) -> str:
     """The blind benchmark's tables: sensors and calibration, scores, brackets, targets."""
-    sensors = [[r.key, _sensor_cell(r), _measured_cell(r)] for r in rows]
+    sensors = [[r.key, _sensor_cell(r), _measured_cell(r), _event_contrast_cell(r)] for r in rows]
     scores = []
     for r in rows:
         full = r.scores.get(METHOD)
@@ -313,7 +338,13 @@ def blind_rows_markdown(rows: list[BlindRow]) -> str:
     return "\n\n".join(
         [
             markdown_table(
-                ["session", "drawn sensor (truth)", "measured (seecap calibrate)"], sensors
+                [
+                    "session",
+                    "drawn sensor (truth)",
+                    "measured (seecap calibrate)",
+                    "events' share of the true ln change per bin, measured / true values",
+                ],
+                sensors,
             ),
             markdown_table(
                 [
@@ -376,7 +407,13 @@ def blind_report(document: dict) -> str:
             "the same field trained on sharp HDR at the true poses, both for as long as `full` "
             "trained. PSNR in dB at the true test poses mapped by the training cameras' "
             "similarity, HDR tone-mapped after one global scale; novel = mean of the x1/4 and "
-            "x4 exposures." + _sharing(document.get("jobs", 1), document.get("threads_per_fit", 0)),
+            "x4 exposures. The events' share is the least-squares slope of each bin's ln change "
+            "as the fit reads it (events in light time, each weighing its pixel's threshold) on "
+            "the true change, rendered from the scene at the bin's ends (`tools/event_contrast.py "
+            "--calibration measured|truth`): under 1 with the true values too, the pixel lost or "
+            "delayed events (a refractory period the edges outrun, a slow photoreceptor); under "
+            "1 with the measured values alone, the calibration."
+            + _sharing(document.get("jobs", 1), document.get("threads_per_fit", 0)),
             blind_rows_markdown(rows),
             f"{met} of {len(rows)} sessions meet every target that applies to them.",
         ]
