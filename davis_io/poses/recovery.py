@@ -1,12 +1,16 @@
 """Reconstruction with fallbacks: the documented strategies, tried in order until one registers.
 
-Every strategy but the last maps the sharpest latent frame of each view first (wider
-baselines for the initial pair) and then registers all latent frames into that model.
+Most strategies map the sharpest latent frame of each view first (wider baselines for the
+initial pair) and then register all latent frames into that model.
 
 1. ``exhaustive``: SIFT matching of every pair (the default).
-2. ``guided``: another matcher, a looser ratio test plus geometry-guided matching.
-3. ``relaxed-initialisation``: accept a smaller, lower-parallax initial pair.
-4. ``sharpest-per-view``: map only the sharpest latent frame of each view; the other latent
+2. ``all-at-once``: the same matches, every latent frame mapped from the start. A handful of
+   keyframes can settle on a degenerate model: six views of a small room session registered 4
+   of their 30 latent frames at a focal length of 2094 px (true 140) after every keyframe-first
+   strategy, and all 30 at 154 px mapped at once.
+3. ``guided``: another matcher, a looser ratio test plus geometry-guided matching.
+4. ``relaxed-initialisation``: accept a smaller, lower-parallax initial pair.
+5. ``sharpest-per-view``: map only the sharpest latent frame of each view; the other latent
    time points get poses interpolated in time (done by the caller for every unregistered one).
 
 A strategy succeeds when it registers at least ``REGISTERED_FRACTION`` of its images.
@@ -56,16 +60,19 @@ class Strategy:
         matcher: how to match (a new matcher replaces the database's matches).
         relaxed_initialisation: see :class:`~davis_io.poses.colmap.MapperSettings`.
         sharpest_only: map only the sharpest latent frame of each view.
+        keyframes_first: map the sharpest latent frame of each view before the others.
     """
 
     name: str
     matcher: Matcher
     relaxed_initialisation: bool = False
     sharpest_only: bool = False
+    keyframes_first: bool = True
 
 
 STRATEGIES: tuple[Strategy, ...] = (
     Strategy("exhaustive", Matcher.EXHAUSTIVE),
+    Strategy("all-at-once", Matcher.EXHAUSTIVE, keyframes_first=False),
     Strategy("guided", Matcher.GUIDED),
     Strategy("relaxed-initialisation", Matcher.GUIDED, relaxed_initialisation=True),
     Strategy("sharpest-per-view", Matcher.GUIDED, relaxed_initialisation=True, sharpest_only=True),
@@ -98,6 +105,9 @@ def _images_of(strategy: Strategy, names: Sequence[Sequence[str]], sharpness) ->
 def _map(strategy, images, work_dir, image_dir, names, sharpness, mapping) -> SparseModel:
     """Keyframes (sharpest per view) first, then, unless keyframes are all, every image."""
     model_dir = work_dir / "sparse" / strategy.name
+    if not strategy.keyframes_first:
+        settings = MapperSettings(strategy.relaxed_initialisation, tuple(images))
+        return reconstruct(work_dir / DATABASE_NAME, image_dir, model_dir, settings, **mapping)
     keyframes = _images_of(Strategy("", strategy.matcher, sharpest_only=True), names, sharpness)
     keyframe_dir = model_dir if strategy.sharpest_only else model_dir / "keyframes"
     settings = MapperSettings(strategy.relaxed_initialisation, tuple(keyframes))
