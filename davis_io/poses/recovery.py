@@ -103,7 +103,7 @@ def _images_of(strategy: Strategy, names: Sequence[Sequence[str]], sharpness) ->
 
 
 def _map(strategy, images, work_dir, image_dir, names, sharpness, mapping) -> SparseModel:
-    """Keyframes (sharpest per view) first, then, unless keyframes are all, every image."""
+    """Every image at once, the keyframes (sharpest per view) alone, or keyframes then all."""
     model_dir = work_dir / "sparse" / strategy.name
     if not strategy.keyframes_first:
         settings = MapperSettings(strategy.relaxed_initialisation, tuple(images))
