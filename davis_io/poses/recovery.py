@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from enum import Enum
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +52,17 @@ MINIMUM_FRACTION = 0.5
 """Below this share of its images (or under 3 images) even the best model is not usable."""
 
 
+class Order(Enum):
+    """Which latent frames a strategy maps, and in which order."""
+
+    KEYFRAMES_FIRST = "keyframes-first"
+    """The sharpest latent frame of each view, then every latent frame into their model."""
+    ALL_AT_ONCE = "all-at-once"
+    """Every latent frame from the start."""
+    KEYFRAMES_ONLY = "keyframes-only"
+    """The sharpest latent frame of each view alone."""
+
+
 @dataclass(frozen=True)
 class Strategy:
     """One way of running COLMAP.
@@ -59,23 +71,23 @@ class Strategy:
         name: name shown in the report.
         matcher: how to match (a new matcher replaces the database's matches).
         relaxed_initialisation: see :class:`~davis_io.poses.colmap.MapperSettings`.
-        sharpest_only: map only the sharpest latent frame of each view.
-        keyframes_first: map the sharpest latent frame of each view before the others.
+        order: which images are mapped, and in which order.
     """
 
     name: str
     matcher: Matcher
     relaxed_initialisation: bool = False
-    sharpest_only: bool = False
-    keyframes_first: bool = True
+    order: Order = Order.KEYFRAMES_FIRST
 
 
 STRATEGIES: tuple[Strategy, ...] = (
     Strategy("exhaustive", Matcher.EXHAUSTIVE),
-    Strategy("all-at-once", Matcher.EXHAUSTIVE, keyframes_first=False),
+    Strategy("all-at-once", Matcher.EXHAUSTIVE, order=Order.ALL_AT_ONCE),
     Strategy("guided", Matcher.GUIDED),
     Strategy("relaxed-initialisation", Matcher.GUIDED, relaxed_initialisation=True),
-    Strategy("sharpest-per-view", Matcher.GUIDED, relaxed_initialisation=True, sharpest_only=True),
+    Strategy(
+        "sharpest-per-view", Matcher.GUIDED, relaxed_initialisation=True, order=Order.KEYFRAMES_ONLY
+    ),
 )
 
 
@@ -96,24 +108,25 @@ class Outcome:
     tried: tuple[str, ...]
 
 
-def _images_of(strategy: Strategy, names: Sequence[Sequence[str]], sharpness) -> list[str]:
-    if not strategy.sharpest_only:
-        return [name for view in names for name in view]
+def _keyframes(names: Sequence[Sequence[str]], sharpness) -> list[str]:
     return [view[int(np.argmax(scores))] for view, scores in zip(names, sharpness, strict=True)]
+
+
+def _images_of(strategy: Strategy, names: Sequence[Sequence[str]], sharpness) -> list[str]:
+    if strategy.order is Order.KEYFRAMES_ONLY:
+        return _keyframes(names, sharpness)
+    return [name for view in names for name in view]
 
 
 def _map(strategy, images, work_dir, image_dir, names, sharpness, mapping) -> SparseModel:
     """Every image at once, the keyframes (sharpest per view) alone, or keyframes then all."""
     model_dir = work_dir / "sparse" / strategy.name
-    if not strategy.keyframes_first:
+    if strategy.order is not Order.KEYFRAMES_FIRST:  # its images are the ones to map
         settings = MapperSettings(strategy.relaxed_initialisation, tuple(images))
         return reconstruct(work_dir / DATABASE_NAME, image_dir, model_dir, settings, **mapping)
-    keyframes = _images_of(Strategy("", strategy.matcher, sharpest_only=True), names, sharpness)
-    keyframe_dir = model_dir if strategy.sharpest_only else model_dir / "keyframes"
-    settings = MapperSettings(strategy.relaxed_initialisation, tuple(keyframes))
-    model = reconstruct(work_dir / DATABASE_NAME, image_dir, keyframe_dir, settings, **mapping)
-    if strategy.sharpest_only:
-        return model
+    keyframe_dir = model_dir / "keyframes"
+    settings = MapperSettings(strategy.relaxed_initialisation, tuple(_keyframes(names, sharpness)))
+    reconstruct(work_dir / DATABASE_NAME, image_dir, keyframe_dir, settings, **mapping)
     settings = MapperSettings(strategy.relaxed_initialisation, tuple(images))
     return reconstruct(
         work_dir / DATABASE_NAME,
