@@ -177,7 +177,10 @@ def match_features(database: Path, matcher: Matcher) -> None:
 
 def _pipeline_options(settings: MapperSettings, fixed_intrinsics: bool):
     options = pycolmap.IncrementalPipelineOptions()
-    options.multiple_models = False
+    # A first initial pair can settle on a degenerate model (three keyframes at a focal length
+    # 40x the image width, nothing more registers); further models from other pairs find the
+    # scene, and the largest one is kept.
+    options.multiple_models = True
     options.random_seed = SEED
     options.num_threads = 1  # parallel bundle adjustment sums in another order every run
     options.extract_colors = False
