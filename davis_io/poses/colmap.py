@@ -92,6 +92,9 @@ class SparseModel:
         bounds: ``(near, far)`` depth of the sparse points seen by the registered images
             (1st and 99th percentiles of all observations, trimming stray points), COLMAP units.
         reprojection_error_px: mean reprojection error of all observations, pixels.
+        plausible_camera: whether the camera passes COLMAP's own sanity bounds (focal length
+            0.1 to 10 times the larger image side, small distortion terms); a degenerate model
+            of a few images can drift far outside them.
     """
 
     c2w: dict[str, np.ndarray]
@@ -101,6 +104,7 @@ class SparseModel:
     track_counts: dict[str, int] = field(default_factory=dict)
     bounds: np.ndarray = field(default_factory=lambda: np.zeros(2))
     reprojection_error_px: float = 0.0
+    plausible_camera: bool = True
 
 
 def _quiet() -> None:
@@ -243,7 +247,7 @@ def reconstruct(
             "texture or overlap. Record a scene with more visible detail, move the camera more "
             "slowly or use more frames"
         )
-    best = max(models.values(), key=lambda model: model.num_reg_images())
+    best = max(models.values(), key=lambda model: (_plausible(model), model.num_reg_images()))
     best.write(model_dir)
     return sparse_model_from(best)
 
@@ -278,4 +282,16 @@ def sparse_model_from(reconstruction: pycolmap.Reconstruction) -> SparseModel:
         track_counts=tracks,
         bounds=bounds,
         reprojection_error_px=float(reconstruction.compute_mean_reprojection_error()),
+        plausible_camera=_plausible(reconstruction),
+    )
+
+
+def _plausible(reconstruction: pycolmap.Reconstruction) -> bool:
+    """Whether every camera lies within the mapper's own limits of a sane camera."""
+    sane = pycolmap.IncrementalMapperOptions()
+    return not any(
+        camera.has_bogus_params(
+            sane.min_focal_length_ratio, sane.max_focal_length_ratio, sane.max_extra_param
+        )
+        for camera in reconstruction.cameras.values()
     )

@@ -13,7 +13,10 @@ initial pair) and then register all latent frames into that model.
 5. ``sharpest-per-view``: map only the sharpest latent frame of each view; the other latent
    time points get poses interpolated in time (done by the caller for every unregistered one).
 
-A strategy succeeds when it registers at least ``REGISTERED_FRACTION`` of its images.
+A strategy succeeds when it registers at least ``REGISTERED_FRACTION`` of its images. A model
+whose estimated camera is not plausible (COLMAP's own bounds: a focal length 0.1 to 10 times the
+larger image side) counts as no model at all: a degenerate one can register a few images at any
+focal length, and was once kept at 12 times the image width.
 """
 
 from __future__ import annotations
@@ -184,6 +187,8 @@ def reconstruct_with_recovery(
         try:
             model = _map(strategy, images, work_dir, image_dir, names, sharpness, mapping)
         except ColmapError:
+            continue
+        if not (model.plausible_camera or mapping["fixed_intrinsics"]):
             continue
         fraction = len(model.c2w) / len(images)
         if fraction >= REGISTERED_FRACTION:

@@ -3,11 +3,13 @@ import sys
 
 import cv2
 import numpy as np
+import pycolmap
 import pytest
 from pose_scenes import INTRINSICS, orbit_poses, render_box, texture
 
 from davis_io.geometry import align_poses, rotation_error_deg
-from davis_io.poses.colmap import ColmapError
+from davis_io.poses import recovery
+from davis_io.poses.colmap import ColmapError, SparseModel, sparse_model_from
 from davis_io.poses.recovery import reconstruct_with_recovery
 
 
@@ -68,3 +70,37 @@ def test_sigterm_ends_a_process_that_imported_pycolmap_without_a_native_stack_du
     )
     assert done.returncode == -15  # ended by the signal, as without pycolmap
     assert "stack trace" not in done.stderr and "Aborted" not in done.stderr
+
+
+@pytest.mark.parametrize(("focal", "plausible"), [(289.0, True), (34.0, False), (14813.0, False)])
+def test_a_camera_outside_colmaps_own_bounds_is_not_plausible(focal, plausible):
+    reconstruction = pycolmap.Reconstruction()
+    reconstruction.add_camera(
+        pycolmap.Camera(
+            model="SIMPLE_PINHOLE", width=346, height=260, params=[focal, 173.0, 130.0], camera_id=1
+        )
+    )
+    # 0.1 to 10 times the larger side, 346 px: 34.6 to 3460 px.
+    assert sparse_model_from(reconstruction).plausible_camera is plausible
+
+
+def test_recovery_passes_over_a_model_with_an_implausible_camera(tmp_path, monkeypatch):
+    names = [[f"{view}_{latent}.png" for latent in range(2)] for view in range(4)]
+    every = [name for view in names for name in view]
+
+    def mapped(strategy, images, *_args):
+        degenerate = strategy.name == "exhaustive"  # everything registered, at 40x the width
+        return SparseModel(
+            c2w={name: np.eye(4) for name in images},
+            intrinsics=np.array([14813.0, 14813.0, 172.5, 129.5]) if degenerate else INTRINSICS,
+            distortion=np.zeros(0),
+            points=np.zeros((0, 3)),
+            plausible_camera=not degenerate,
+        )
+
+    monkeypatch.setattr(recovery, "extract_features", lambda *_args, **_kw: tmp_path / "db")
+    monkeypatch.setattr(recovery, "match_features", lambda *_args: None)
+    monkeypatch.setattr(recovery, "_map", mapped)
+    outcome = reconstruct_with_recovery(tmp_path, tmp_path, names, [[0.0, 1.0]] * 4)
+    assert (outcome.strategy, outcome.tried) == ("all-at-once", ("exhaustive", "all-at-once"))
+    assert sorted(outcome.model.c2w) == sorted(every)
