@@ -113,8 +113,8 @@ class ConsistencyProblem:
         else:
             coefficients = np.linalg.solve(self._normal, self._design.T @ change)
             response = InverseResponse(self.knots, np.concatenate([[0.0], coefficients]))
-        frame, pixel = self._frame, self._pixel
-        frame_change = response(self.values[frame + 1, pixel]) - response(self.values[frame, pixel])
+        # ln g(v_(k+1)) - ln g(v_k): the pairs' basis differences times ln g at the knots.
+        frame_change = self._design @ response.log_exposure[1:]
         return frame_change - change, response
 
     def _linear_log_exposure(self) -> np.ndarray:

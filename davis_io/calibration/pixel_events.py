@@ -33,6 +33,7 @@ class PixelEvents:
         between_off: the same for OFF events.
         segment_key: ``(S,)`` int64 ``k * P + p`` of each segment after an event inside an
             exposure.
+        segment_pixel: ``(S,)`` int64 its pixel ``p``.
         segment_share: ``(S,)`` float64 its duration over the exposure's.
         segment_on: ``(S,)`` float64 ON events of the pixel since its exposure started, up to
             and including the one that opens the segment.
@@ -44,6 +45,7 @@ class PixelEvents:
     between_on: np.ndarray
     between_off: np.ndarray
     segment_key: np.ndarray
+    segment_pixel: np.ndarray
     segment_share: np.ndarray
     segment_on: np.ndarray
     segment_off: np.ndarray
@@ -105,7 +107,7 @@ def pixel_events(
     frames = len(exposure_start_us)
     between_on = np.zeros((max(frames - 1, 0), pixel_count))
     between_off = np.zeros_like(between_on)
-    keys, shares, ons, offs = [], [], [], []
+    keys, chosen, shares, ons, offs = [], [], [], [], []
     lead = np.ones((frames, pixel_count))
     for k in range(frames):
         start, end = int(exposure_start_us[k]), int(exposure_end_us[k])
@@ -119,7 +121,8 @@ def pixel_events(
         pixels, share, on, off, lead[k] = _exposure_segments(
             times[first:stop], pixel_index[first:stop], is_on[first:stop], start, end, pixel_count
         )
-        keys.append(k * pixel_count + pixels.astype(np.int64))
+        chosen.append(pixels.astype(np.int64))
+        keys.append(k * pixel_count + chosen[-1])
         shares.append(share)
         ons.append(on)
         offs.append(off)
@@ -127,6 +130,7 @@ def pixel_events(
         between_on,
         between_off,
         np.concatenate(keys) if keys else np.zeros(0, np.int64),
+        np.concatenate(chosen) if chosen else np.zeros(0, np.int64),
         np.concatenate(shares) if shares else np.zeros(0),
         np.concatenate(ons) if ons else np.zeros(0),
         np.concatenate(offs) if offs else np.zeros(0),
@@ -160,7 +164,7 @@ def log_blur(
     value again: only when asked.
     """
     frames, count = events.frames, events.pixels
-    pixel = events.segment_key % count
+    pixel = events.segment_pixel
     theta_on = np.broadcast_to(np.asarray(theta_on, np.float64), (count,))
     theta_off = np.broadcast_to(np.asarray(theta_off, np.float64), (count,))
     weight = events.segment_share * np.exp(
