@@ -188,7 +188,7 @@ def reconstruct_with_recovery(
             model = _map(strategy, images, work_dir, image_dir, names, sharpness, mapping)
         except ColmapError:
             continue
-        if not (model.plausible_camera or mapping["fixed_intrinsics"]):
+        if not (model.plausible_camera or intrinsics is not None):  # a stated camera stands
             continue
         fraction = len(model.c2w) / len(images)
         if fraction >= REGISTERED_FRACTION:
