@@ -18,7 +18,7 @@ from davis_io.calibration.consistency import (
     fit_thresholds,
 )
 from davis_io.calibration.dead_time import dead_time_us
-from davis_io.calibration.pixel_events import pixel_events
+from davis_io.calibration.pixel_events import event_path, pixel_events
 from davis_io.calibration.response_fit import (
     FrameLevels,
     frame_levels,
@@ -79,7 +79,7 @@ class CalibrationInput:
 
 
 class _Problems:
-    """Builds consistency problems over a set of pixels at any latency (events cut once)."""
+    """Builds consistency problems over a set of pixels at any latency (the paths built once)."""
 
     def __init__(self, recording: CalibrationInput, pixels: np.ndarray, levels, knots):
         height, width = recording.shape
@@ -87,9 +87,9 @@ class _Problems:
         lookup[pixels] = np.arange(len(pixels))
         index = lookup[recording.y.astype(np.int64) * width + recording.x]
         chosen = index >= 0
-        self._times = recording.times_us[chosen]
-        self._index = index[chosen]
-        self._on = recording.is_on[chosen]
+        self._path = event_path(
+            recording.times_us[chosen], index[chosen], recording.is_on[chosen], len(pixels)
+        )
         self._recording = recording
         values = recording.frames.reshape(len(recording.frames), -1)[:, pixels]
         inside = (values > levels.low) & (values < levels.high)
@@ -102,12 +102,9 @@ class _Problems:
         ``factors``: every sensor pixel's ON and OFF factors (flat), or None for ones.
         """
         events = pixel_events(
-            self._times,
-            self._index,
-            self._on,
+            self._path,
             self._recording.exposure_start_us,
             self._recording.exposure_end_us,
-            len(self.pixels),
             latency_us,
         )
         on, off = (

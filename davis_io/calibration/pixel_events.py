@@ -1,141 +1,267 @@
 """What each pixel's events say about its light, in the form frame/event consistency reads.
 
-For pixel ``p`` and frame ``k`` with exposure ``[s_k, e_k]``, let ``N(t)`` be the pixel's
-signed event count since ``s_k``, its ON and OFF parts weighted by the thresholds:
-``n(t) = theta_on N_on(t) - theta_off N_off(t)`` is then the change of ln intensity since
-``s_k``. The frame integrates linear intensity over the exposure, so
+A pixel's events are read as a path of its ln intensity through the levels they mark
+(:func:`event_path`). Counted in thresholds, an ON event ends a climb of one ON level and an
+OFF event a fall of one OFF level. Between two events of the same polarity the light goes
+straight from one level to the next. Between opposite events it went on past the first level
+and came back, so the path rises (or falls) half a level past the first by the middle of the
+interval, then goes straight to the second. Before a pixel's first event and after its last the
+path is flat.
+
+Why this reading: on ideal pixels (each event stamped at its crossing; thresholds 0.16 to
+0.45) the light read flat at the last level (a staircase) lags the truth by 2.5 ms, which the
+latency profile then takes for the sensor's; read straight through the levels alone it leads by
+0.5 ms. This path has no lag and about half the RMS error of either (0.07 against 0.15-0.17).
+
+For pixel ``p`` and frame ``k`` with exposure ``[s_k, e_k]``, let ``A(t)`` and ``B(t)`` be the
+ON and OFF levels the path has climbed since ``s_k``; ``n(t) = theta_on A(t) - theta_off B(t)``
+is then the change of ln intensity since ``s_k``. The frame integrates linear intensity over the
+exposure, so
 
     ln g(v_k) = E(s_k) + ln M_k,   M_k = mean over the exposure of exp(n(t)),
 
 with ``g`` the inverse response and ``E`` the pixel's ln intensity. ``M_k`` is a sum over the
-segments between the pixel's events, held here as flat arrays; :func:`log_blur` evaluates it for
-any thresholds (per pixel) with its derivatives. Between exposure starts ``s_k`` and
-``s_(k+1)`` only the counts matter (:attr:`PixelEvents.between_on` and ``between_off``).
+path's straight pieces inside the exposure: a piece of share ``w`` that starts at ``n0`` and
+climbs ``d`` adds ``w e^n0 (e^d - 1) / d``. :func:`pixel_events` cuts the pieces;
+:func:`log_blur` evaluates ``ln M`` for any thresholds (per pixel) with its derivatives. From
+one exposure start to the next only the levels climbed matter (:attr:`PixelEvents.between_on`
+and ``between_off``, fractional where a start falls inside a piece).
 
-Event times are moved ``latency_us`` earlier first, so they describe when the light changed.
+Events come ``latency_us`` after the light change they report: the path is read that much later.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-__all__ = ["LogBlur", "PixelEvents", "log_blur", "pixel_events"]
+__all__ = ["EventPath", "LogBlur", "PixelEvents", "event_path", "log_blur", "pixel_events"]
+
+_BLOCK = 1 << 20
+"""Pieces summed at a time by :func:`log_blur`."""
+
+_TIME_BITS = 36
+"""Bits of a knot's time in its sort key (half microseconds: 9.5 hours from the first knot)."""
 
 
 @dataclass(frozen=True)
-class PixelEvents:
-    """The events of ``P`` chosen pixels over ``F`` frames.
+class EventPath:
+    """The knots of every pixel's path, sorted by pixel, then time.
 
     Attributes:
-        between_on: ``(F-1, P)`` ON events from exposure start ``k`` to exposure start ``k+1``.
-        between_off: the same for OFF events.
-        segment_key: ``(S,)`` int64 ``k * P + p`` of each segment after an event inside an
-            exposure.
-        segment_pixel: ``(S,)`` int64 its pixel ``p``.
-        segment_share: ``(S,)`` float64 its duration over the exposure's.
-        segment_on: ``(S,)`` float64 ON events of the pixel since its exposure started, up to
-            and including the one that opens the segment.
-        segment_off: the same for OFF events.
-        lead_share: ``(F, P)`` share of each exposure before the pixel's first event in it (all
-            of it without events).
+        pixel: ``(K,)`` int64 the knot's pixel, ``0 .. P-1``.
+        time_us: ``(K,)`` float64 its time (mid-interval knots fall on half microseconds).
+        on: ``(K,)`` float64 ON levels climbed there, from an origin of the pixel's own (only
+            differences within a pixel mean anything).
+        off: the same for OFF levels.
+        pixel_count: P.
+        origin_us: time of the sort keys' zero, before every knot.
     """
 
-    between_on: np.ndarray
-    between_off: np.ndarray
-    segment_key: np.ndarray
-    segment_pixel: np.ndarray
-    segment_share: np.ndarray
-    segment_on: np.ndarray
-    segment_off: np.ndarray
-    lead_share: np.ndarray
+    pixel: np.ndarray
+    time_us: np.ndarray
+    on: np.ndarray
+    off: np.ndarray
+    pixel_count: int
+    origin_us: float
 
-    @property
-    def frames(self) -> int:
-        """Number of frames F."""
-        return self.lead_share.shape[0]
+    def _key(self, pixel: np.ndarray, time_us: np.ndarray | float) -> np.ndarray:
+        ticks = np.clip(np.rint(2 * (np.asarray(time_us) - self.origin_us)), 0, 2**_TIME_BITS - 1)
+        return (pixel << _TIME_BITS) | ticks.astype(np.int64)
 
-    @property
-    def pixels(self) -> int:
-        """Number of pixels P."""
-        return self.lead_share.shape[1]
+    @cached_property
+    def _keys(self) -> np.ndarray:
+        return self._key(self.pixel, self.time_us)
+
+    def locate(self, time_us: float, side: str) -> np.ndarray:
+        """``(P,)`` each pixel's first knot after ``time_us`` (at or after it, ``side="left"``).
+
+        Where a pixel has none, the next pixel's first knot.
+        """
+        every = np.arange(self.pixel_count, dtype=np.int64)
+        return np.searchsorted(self._keys, self._key(every, time_us), side=side)
+
+    def read(self, time_us: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every pixel's ON and OFF levels at ``time_us`` ``(P,)``, and :meth:`locate` there."""
+        after = self.locate(time_us, "right")
+        if len(self.pixel) == 0:
+            return np.zeros(self.pixel_count), np.zeros(self.pixel_count), after
+        every = np.arange(self.pixel_count, dtype=np.int64)
+        before, later = np.maximum(after - 1, 0), np.minimum(after, len(self.pixel) - 1)
+        has_before = (after > 0) & (self.pixel[before] == every)
+        has_after = (after < len(self.pixel)) & (self.pixel[later] == every)
+        both = has_before & has_after
+        span = np.where(both, self.time_us[later] - self.time_us[before], 1.0)
+        part = np.where(both, (time_us - self.time_us[before]) / span, 0.0)
+        levels = []
+        for level in (self.on, self.off):
+            value = np.where(has_before, level[before], np.where(has_after, level[later], 0.0))
+            levels.append(np.where(both, value + part * (level[later] - level[before]), value))
+        return levels[0], levels[1], after
 
 
-def _exposure_segments(times, pixels, is_on, start_us, end_us, pixel_count):
-    """Segments after each event of one exposure, pixel by pixel (see :class:`PixelEvents`)."""
-    order = np.argsort(pixels, kind="stable")
-    times, pixels, is_on = times[order], pixels[order], is_on[order]
-    span = float(end_us - start_us)
-    first = np.ones(len(pixels), bool)
-    first[1:] = pixels[1:] != pixels[:-1]
-    starts = np.flatnonzero(first)
-    sizes = np.diff(np.append(starts, len(pixels)))
-    on_total = np.cumsum(is_on)
-    off_total = np.cumsum(~is_on)
-    on = on_total - np.repeat(on_total[starts] - is_on[starts], sizes)
-    off = off_total - np.repeat(off_total[starts] - ~is_on[starts], sizes)
-    following = np.append(times[1:], end_us)
-    following[np.append(starts[1:] - 1, len(times) - 1)] = end_us  # each pixel's last event
-    lead = np.ones(pixel_count)
-    lead[pixels[starts]] = (times[starts] - start_us) / span
-    return pixels, (following - times) / span, on.astype(np.float64), off.astype(np.float64), lead
-
-
-def pixel_events(
-    times_us: np.ndarray,
-    pixel_index: np.ndarray,
-    is_on: np.ndarray,
-    exposure_start_us: np.ndarray,
-    exposure_end_us: np.ndarray,
-    pixel_count: int,
-    latency_us: int = 0,
-) -> PixelEvents:
-    """Collect the events of the chosen pixels.
+def event_path(
+    times_us: np.ndarray, pixel_index: np.ndarray, is_on: np.ndarray, pixel_count: int
+) -> EventPath:
+    """The path of the chosen pixels' light through their events (see the module).
 
     Args:
         times_us: ``(N,)`` event times, sorted.
         pixel_index: ``(N,)`` the event's pixel among the chosen ones, ``0 .. P-1`` (events of
             other pixels removed before).
         is_on: ``(N,)`` bool polarity.
-        exposure_start_us: ``(F,)`` exposure starts.
-        exposure_end_us: ``(F,)`` exposure ends.
         pixel_count: P.
-        latency_us: events come this much after the light change they report.
     """
-    times = np.asarray(times_us, np.int64) - int(latency_us)
-    frames = len(exposure_start_us)
-    between_on = np.zeros((max(frames - 1, 0), pixel_count))
-    between_off = np.zeros_like(between_on)
-    keys, chosen, shares, ons, offs = [], [], [], [], []
-    lead = np.ones((frames, pixel_count))
-    for k in range(frames):
-        start, end = int(exposure_start_us[k]), int(exposure_end_us[k])
-        if k + 1 < frames:
-            first, stop = np.searchsorted(times, [start, int(exposure_start_us[k + 1])])
-            polarity = is_on[first:stop]
-            between_on[k] = np.bincount(pixel_index[first:stop][polarity], minlength=pixel_count)
-            between_off[k] = np.bincount(pixel_index[first:stop][~polarity], minlength=pixel_count)
-        first = np.searchsorted(times, start, side="left")
-        stop = np.searchsorted(times, end, side="right")
-        pixels, share, on, off, lead[k] = _exposure_segments(
-            times[first:stop], pixel_index[first:stop], is_on[first:stop], start, end, pixel_count
+    order = np.argsort(np.asarray(pixel_index, np.int64), kind="stable")  # then by time
+    time = np.asarray(times_us, np.int64)[order].astype(np.float64)
+    pixel = np.asarray(pixel_index, np.int64)[order]
+    on = np.asarray(is_on, bool)[order]
+    climbed_on = np.cumsum(on).astype(np.float64)
+    climbed_off = np.cumsum(~on).astype(np.float64)
+    first = np.ones(len(pixel), bool)
+    first[1:] = pixel[1:] != pixel[:-1]
+    turn = np.zeros(len(pixel), bool)  # the next event is the same pixel's, of the other sign
+    turn[:-1] = ~first[1:] & (on[1:] != on[:-1])
+    # Each event's knot, after the level before a pixel's first event (a microsecond earlier,
+    # so that step stays sharp) and before the half-level turn to an opposite neighbour.
+    slots = 1 + first + turn
+    at = np.cumsum(slots) - slots + first
+    size = int(slots.sum())
+    knots = [np.empty(size), np.empty(size), np.empty(size)]
+    knot_pixel = np.empty(size, np.int64)
+    lead, mid = at[first] - 1, at[turn] + 1
+    following = np.flatnonzero(turn) + 1
+    for column, event, before, middle in zip(
+        knots,
+        (time, climbed_on, climbed_off),
+        (time[first] - 1, climbed_on[first] - on[first], climbed_off[first] - ~on[first]),
+        (
+            0.5 * (time[turn] + time[following]),
+            climbed_on[turn] + 0.5 * on[turn],
+            climbed_off[turn] + 0.5 * ~on[turn],
+        ),
+        strict=True,
+    ):
+        column[at], column[lead], column[mid] = event, before, middle
+    knot_pixel[at], knot_pixel[lead], knot_pixel[mid] = pixel, pixel[first], pixel[turn]
+    origin = float(time.min()) - 2.0 if len(time) else 0.0
+    return EventPath(knot_pixel, knots[0], knots[1], knots[2], pixel_count, origin)
+
+
+@dataclass(frozen=True)
+class PixelEvents:
+    """The path of ``P`` chosen pixels over ``F`` frames, cut into straight pieces.
+
+    Attributes:
+        between_on: ``(F-1, P)`` ON levels climbed from exposure start ``k`` to start ``k+1``.
+        between_off: the same for OFF levels.
+        flat_share: ``(F, P)`` share of each exposure over which the path stays at its level at
+            the exposure's start (all of it for a pixel without events nearby).
+        piece_key: ``(S,)`` int64 ``k * P + p`` of every other piece, sorted.
+        piece_pixel: ``(S,)`` int32 its pixel ``p``.
+        piece_share: ``(S,)`` float32 its duration over the exposure's.
+        piece_on: ``(S,)`` float32 ON levels climbed from the exposure's start to the piece's.
+        piece_off: the same for OFF levels.
+        rise_on: ``(S,)`` float32 ON levels climbed over the piece.
+        rise_off: the same for OFF levels.
+    """
+
+    between_on: np.ndarray
+    between_off: np.ndarray
+    flat_share: np.ndarray
+    piece_key: np.ndarray
+    piece_pixel: np.ndarray
+    piece_share: np.ndarray
+    piece_on: np.ndarray
+    piece_off: np.ndarray
+    rise_on: np.ndarray
+    rise_off: np.ndarray
+
+    @property
+    def frames(self) -> int:
+        """Number of frames F."""
+        return self.flat_share.shape[0]
+
+    @property
+    def pixels(self) -> int:
+        """Number of pixels P."""
+        return self.flat_share.shape[1]
+
+
+def _exposure_pieces(path: EventPath, start, end, start_levels, end_levels):
+    """Every pixel's pieces of the path between ``start`` and ``end`` (read times, µs).
+
+    Returns:
+        pixel, share, ON and OFF levels at the piece's start since ``start``, and the ON and OFF
+        levels each piece climbs (zero-length pieces dropped).
+    """
+    on_start, off_start, first_inside = start_levels
+    on_end, off_end, _ = end_levels
+    inside = np.maximum(path.locate(end, "left") - first_inside, 0)
+    points = inside + 2  # the start, the knots strictly inside, the end
+    offset = np.cumsum(points) - points
+    total = int(points.sum())
+    time, on, off = np.empty(total), np.empty(total), np.empty(total)
+    time[offset], on[offset], off[offset] = start, on_start, off_start
+    last = offset + points - 1
+    time[last], on[last], off[last] = end, on_end, off_end
+    count = int(inside.sum())
+    if count:
+        rank = np.arange(count) - np.repeat(np.cumsum(inside) - inside, inside)
+        source = np.repeat(first_inside, inside) + rank
+        target = np.repeat(offset + 1, inside) + rank
+        time[target], on[target], off[target] = (
+            path.time_us[source],
+            path.on[source],
+            path.off[source],
         )
-        chosen.append(pixels.astype(np.int64))
-        keys.append(k * pixel_count + chosen[-1])
-        shares.append(share)
-        ons.append(on)
-        offs.append(off)
-    return PixelEvents(
-        between_on,
-        between_off,
-        np.concatenate(keys) if keys else np.zeros(0, np.int64),
-        np.concatenate(chosen) if chosen else np.zeros(0, np.int64),
-        np.concatenate(shares) if shares else np.zeros(0),
-        np.concatenate(ons) if ons else np.zeros(0),
-        np.concatenate(offs) if offs else np.zeros(0),
-        lead,
+    owner = np.repeat(np.arange(path.pixel_count, dtype=np.int64), points)
+    piece = np.flatnonzero((owner[:-1] == owner[1:]) & (time[1:] > time[:-1]))
+    pixel = owner[piece]
+    return (
+        pixel,
+        (time[piece + 1] - time[piece]) / (end - start),
+        on[piece] - on_start[pixel],
+        off[piece] - off_start[pixel],
+        on[piece + 1] - on[piece],
+        off[piece + 1] - off[piece],
     )
+
+
+def pixel_events(
+    path: EventPath,
+    exposure_start_us: np.ndarray,
+    exposure_end_us: np.ndarray,
+    latency_us: int = 0,
+) -> PixelEvents:
+    """Cut the path into the pieces of every exposure, read ``latency_us`` late."""
+    frames, count = len(exposure_start_us), path.pixel_count
+    starts = [path.read(float(s) + latency_us) for s in exposure_start_us]
+    between_on = np.diff(np.stack([s[0] for s in starts]), axis=0).reshape(-1, count)
+    between_off = np.diff(np.stack([s[1] for s in starts]), axis=0).reshape(-1, count)
+    flat = np.zeros((frames, count))
+    kept: list[list[np.ndarray]] = [[] for _ in range(7)]
+    for k in range(frames):
+        start = float(exposure_start_us[k]) + latency_us
+        end = float(exposure_end_us[k]) + latency_us
+        pixel, share, on, off, rise_on, rise_off = _exposure_pieces(
+            path, start, end, starts[k], path.read(end)
+        )
+        level = (on == 0) & (off == 0) & (rise_on == 0) & (rise_off == 0)
+        flat[k] = np.bincount(pixel[level], weights=share[level], minlength=count)
+        ramp = ~level
+        columns = (k * count + pixel[ramp], pixel[ramp].astype(np.int32))
+        columns += tuple(c[ramp].astype(np.float32) for c in (share, on, off, rise_on, rise_off))
+        for store, column in zip(kept, columns, strict=True):
+            store.append(column)
+    types = (np.int64, np.int32) + (np.float32,) * 5
+    joined = [
+        np.concatenate(store) if store else np.zeros(0, kind)
+        for store, kind in zip(kept, types, strict=True)
+    ]
+    return PixelEvents(between_on, between_off, flat, *joined)
 
 
 @dataclass(frozen=True)
@@ -151,6 +277,20 @@ class LogBlur:
     d_off: np.ndarray | None = None
 
 
+def _mean_exp(climb: np.ndarray, derivative: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """``(e^x - 1) / x``, the mean of ``e^(x t)`` over ``t`` in [0, 1], and its derivative.
+
+    Within 1e-6 of 0 (flat pieces) they are 1 and 1/2 to within 1e-6.
+    """
+    flat = np.abs(climb) < 1e-6
+    x = np.where(flat, 1.0, climb)
+    grown = np.expm1(x)
+    mean = np.where(flat, 1.0, grown / x)
+    if not derivative:
+        return mean, None
+    return mean, np.where(flat, 0.5, ((x - 1) * grown + x) / x**2)
+
+
 def log_blur(
     events: PixelEvents,
     theta_on: np.ndarray,
@@ -159,24 +299,41 @@ def log_blur(
 ) -> LogBlur:
     """``ln M`` of every frame and pixel for per-pixel thresholds ``(P,)`` (or scalars).
 
-    ``M = lead + sum over segments of share * exp(theta_on on - theta_off off)``, at least the
-    lead share and never zero (a segment's weight is positive). The derivatives cost twice the
-    value again: only when asked.
+    ``M = flat share + sum over pieces of share * e^n0 * (e^d - 1) / d``, at least the flat
+    share and never zero (a piece's weight is positive). The derivatives cost twice the value
+    again: only when asked. The pieces are summed in blocks of :data:`_BLOCK` (their keys are
+    sorted): a whole sensor's tens of millions would otherwise cost fresh, page-faulted memory
+    for every temporary.
     """
     frames, count = events.frames, events.pixels
-    pixel = events.segment_pixel
     theta_on = np.broadcast_to(np.asarray(theta_on, np.float64), (count,))
     theta_off = np.broadcast_to(np.asarray(theta_off, np.float64), (count,))
-    weight = events.segment_share * np.exp(
-        theta_on[pixel] * events.segment_on - theta_off[pixel] * events.segment_off
-    )
-    size = frames * count
-    total = np.bincount(events.segment_key, weights=weight, minlength=size).reshape(frames, count)
-    total += events.lead_share
+    sums = [events.flat_share.ravel().copy()]
+    if derivatives:
+        sums += [np.zeros(frames * count), np.zeros(frames * count)]
+    for start in range(0, len(events.piece_key), _BLOCK):
+        block = slice(start, start + _BLOCK)
+        key = events.piece_key[block]
+        first, span = key[0], key[-1] - key[0] + 1
+        pixel = events.piece_pixel[block]
+        on, off = theta_on[pixel], theta_off[pixel]
+        piece_on, piece_off = events.piece_on[block], events.piece_off[block]
+        rise_on, rise_off = events.rise_on[block], events.rise_off[block]
+        base = events.piece_share[block] * np.exp(on * piece_on - off * piece_off)
+        mean, slope = _mean_exp(on * rise_on - off * rise_off, derivatives)
+        weights = [base * mean]
+        if derivatives:
+            weights += [
+                base * (piece_on * mean + rise_on * slope),
+                -base * (piece_off * mean + rise_off * slope),
+            ]
+        for total, weight in zip(sums, weights, strict=True):
+            total[first : first + span] += np.bincount(key - first, weights=weight, minlength=span)
+    total = sums[0].reshape(frames, count)
     if not derivatives:
         return LogBlur(np.log(total))
-    on = np.bincount(events.segment_key, weights=weight * events.segment_on, minlength=size)
-    off = np.bincount(events.segment_key, weights=weight * events.segment_off, minlength=size)
     return LogBlur(
-        np.log(total), on.reshape(frames, count) / total, -off.reshape(frames, count) / total
+        np.log(total),
+        sums[1].reshape(frames, count) / total,
+        sums[2].reshape(frames, count) / total,
     )

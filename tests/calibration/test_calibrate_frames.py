@@ -31,9 +31,10 @@ def calibrated():
 @pytest.mark.parametrize("family", FAMILIES)
 def test_thresholds_of_each_polarity_are_recovered_whatever_the_response(calibrated, family):
     calibration, true_on, true_off = calibrated[family]
-    # Measured on these recordings: 4 to 5 % high (events are a staircase under a ramp).
-    assert calibration.threshold_on == pytest.approx(true_on, rel=0.08)
-    assert calibration.threshold_off == pytest.approx(true_off, rel=0.08)
+    # Measured on these recordings: within 0.5 % (4 to 5 % high with the light read flat at
+    # the last level, a staircase under a ramp).
+    assert calibration.threshold_on == pytest.approx(true_on, rel=0.03)
+    assert calibration.threshold_off == pytest.approx(true_off, rel=0.03)
     # The polarities differ by 40 %; their ratio is measured far tighter than either.
     ratio = calibration.threshold_off / calibration.threshold_on
     assert ratio == pytest.approx(true_off / true_on, rel=0.03)
@@ -92,7 +93,9 @@ def test_the_latency_is_profiled_again_once_the_thresholds_have_settled():
     recording, theta_on, theta_off = synthetic_recording(sensor, seed=4)
     late = dataclasses.replace(recording, times_us=recording.times_us + 3000)
     on_time, delayed = calibrate_frames(recording), calibrate_frames(late)
-    assert delayed.latency_us - on_time.latency_us == pytest.approx(3000, abs=500)
+    # Read flat at the last level (a staircase), these ideal pixels' light looked 2.7 ms late.
+    assert on_time.latency_us <= 500
+    assert delayed.latency_us == pytest.approx(3000, abs=500)
     assert delayed.threshold_on == pytest.approx(np.median(theta_on), rel=0.03)
     assert delayed.threshold_off == pytest.approx(np.median(theta_off), rel=0.03)
 
