@@ -75,20 +75,20 @@ class EventPath:
     def _keys(self) -> np.ndarray:
         return self._key(self.pixel, self.time_us)
 
-    def locate(self, time_us: float, side: str) -> np.ndarray:
-        """``(P,)`` each pixel's first knot after ``time_us`` (at or after it, ``side="left"``).
-
-        Where a pixel has none, the next pixel's first knot.
-        """
-        every = np.arange(self.pixel_count, dtype=np.int64)
-        return np.searchsorted(self._keys, self._key(every, time_us), side=side)
+    @cached_property
+    def pixels(self) -> np.ndarray:
+        """``(P,)`` int64 every pixel, ``0 .. P-1``."""
+        return np.arange(self.pixel_count, dtype=np.int64)
 
     def read(self, time_us: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Every pixel's ON and OFF levels at ``time_us`` ``(P,)``, and :meth:`locate` there."""
-        after = self.locate(time_us, "right")
+        """Every pixel's ON and OFF levels at ``time_us`` ``(P,)``, and its first knot after it.
+
+        A pixel without knots after ``time_us`` gets the next pixel's first knot.
+        """
+        every = self.pixels
+        after = np.searchsorted(self._keys, self._key(every, time_us), side="right")
         if len(self.pixel) == 0:
             return np.zeros(self.pixel_count), np.zeros(self.pixel_count), after
-        every = np.arange(self.pixel_count, dtype=np.int64)
         before, later = np.maximum(after - 1, 0), np.minimum(after, len(self.pixel) - 1)
         has_before = (after > 0) & (self.pixel[before] == every)
         has_after = (after < len(self.pixel)) & (self.pixel[later] == every)
@@ -193,14 +193,16 @@ class PixelEvents:
 def _exposure_pieces(path: EventPath, start, end, start_levels, end_levels):
     """Every pixel's pieces of the path between ``start`` and ``end`` (read times, µs).
 
+    A knot right at ``end`` ends a piece; the zero-length pieces after it are dropped.
+
     Returns:
         pixel, share, ON and OFF levels at the piece's start since ``start``, and the ON and OFF
         levels each piece climbs (zero-length pieces dropped).
     """
     on_start, off_start, first_inside = start_levels
-    on_end, off_end, _ = end_levels
-    inside = np.maximum(path.locate(end, "left") - first_inside, 0)
-    points = inside + 2  # the start, the knots strictly inside, the end
+    on_end, off_end, first_after = end_levels
+    inside = np.maximum(first_after - first_inside, 0)
+    points = inside + 2  # the start, the knots inside, the end
     offset = np.cumsum(points) - points
     total = int(points.sum())
     time, on, off = np.empty(total), np.empty(total), np.empty(total)
@@ -217,7 +219,7 @@ def _exposure_pieces(path: EventPath, start, end, start_levels, end_levels):
             path.on[source],
             path.off[source],
         )
-    owner = np.repeat(np.arange(path.pixel_count, dtype=np.int64), points)
+    owner = np.repeat(path.pixels, points)
     piece = np.flatnonzero((owner[:-1] == owner[1:]) & (time[1:] > time[:-1]))
     pixel = owner[piece]
     return (
@@ -236,13 +238,13 @@ def pixel_events(
     exposure_end_us: np.ndarray,
     latency_us: int = 0,
 ) -> PixelEvents:
-    """Cut the path into the pieces of every exposure, read ``latency_us`` late."""
+    """Cut the path into the pieces of every exposure (at least one), read ``latency_us`` late."""
     frames, count = len(exposure_start_us), path.pixel_count
     starts = [path.read(float(s) + latency_us) for s in exposure_start_us]
     between_on = np.diff(np.stack([s[0] for s in starts]), axis=0).reshape(-1, count)
     between_off = np.diff(np.stack([s[1] for s in starts]), axis=0).reshape(-1, count)
     flat = np.zeros((frames, count))
-    kept: list[list[np.ndarray]] = [[] for _ in range(7)]
+    parts = []
     for k in range(frames):
         start = float(exposure_start_us[k]) + latency_us
         end = float(exposure_end_us[k]) + latency_us
@@ -252,16 +254,16 @@ def pixel_events(
         level = (on == 0) & (off == 0) & (rise_on == 0) & (rise_off == 0)
         flat[k] = np.bincount(pixel[level], weights=share[level], minlength=count)
         ramp = ~level
-        columns = (k * count + pixel[ramp], pixel[ramp].astype(np.int32))
-        columns += tuple(c[ramp].astype(np.float32) for c in (share, on, off, rise_on, rise_off))
-        for store, column in zip(kept, columns, strict=True):
-            store.append(column)
-    types = (np.int64, np.int32) + (np.float32,) * 5
-    joined = [
-        np.concatenate(store) if store else np.zeros(0, kind)
-        for store, kind in zip(kept, types, strict=True)
-    ]
-    return PixelEvents(between_on, between_off, flat, *joined)
+        parts.append(
+            (k * count + pixel[ramp], pixel[ramp].astype(np.int32))
+            + tuple(c[ramp].astype(np.float32) for c in (share, on, off, rise_on, rise_off))
+        )
+    return PixelEvents(
+        between_on,
+        between_off,
+        flat,
+        *(np.concatenate(column) for column in zip(*parts, strict=True)),
+    )
 
 
 @dataclass(frozen=True)
