@@ -18,6 +18,7 @@ from davis_io.calibration.consistency import (
     fit_thresholds,
 )
 from davis_io.calibration.dead_time import dead_time_us
+from davis_io.calibration.frame_noise import frame_noise
 from davis_io.calibration.pixel_events import event_path, pixel_events
 from davis_io.calibration.response_fit import (
     FrameLevels,
@@ -208,16 +209,29 @@ def calibrate_frames(
     )
     dead_time = dead_time_us(recording.times_us, recording.x, recording.y, width)
     progress(f"pixel dead time {dead_time} µs")
+    black_level = levels.black_level or (black if is_linear else 0.0)
+    noise = (
+        frame_noise(recording.frames, black_level, levels.saturation, recording.adc_step)
+        if is_linear
+        else None
+    )
+    if noise:
+        progress(
+            f"frame noise: variance {noise.gain:.2e} x (v - black) + {noise.floor:.2e} "
+            f"(shot noise equals read noise {noise.offset:.4f} above black)"
+        )
     return SensorCalibration(
         threshold_on=float(theta[0]),
         threshold_off=float(theta[1]),
         threshold_on_sd=float(spread[0]),
         threshold_off_sd=float(spread[1]),
         latency_us=latency,
-        black_level=levels.black_level or (black if is_linear else 0.0),
+        black_level=black_level,
         saturation=levels.saturation,
         response_linear=bool(is_linear),
         dead_time_us=dead_time,
+        noise_gain=noise.gain if noise else 0.0,
+        noise_floor=noise.floor if noise else 0.0,
         response_value=response.knots,
         response_log_exposure=response.log_exposure,
         pixel_factor_on=every.factor_on.reshape(height, width).astype(np.float32),
@@ -229,5 +243,10 @@ def calibrate_frames(
         "inverse response, per-pixel factors), latency profiled, the common scale "
         f"{'pinned by the blur' if scale.measured else 'nominal: the blur does not pin it'}; "
         "uncertainty: split-half spread over the pixels (and the profile's width where the "
-        "scale is nominal); dead time: 1st percentile of a pixel's event intervals",
+        "scale is nominal); dead time: 1st percentile of a pixel's event intervals"
+        + (
+            "; frame noise: same-colour neighbours in the smoothest places of each level"
+            if noise
+            else ""
+        ),
     )

@@ -82,6 +82,25 @@ def sensor_noise(
     return np.maximum(electrons, 0) / electrons_per_unit
 
 
+def linear_noise(response: Response, settings: ApsSettings) -> dict:
+    """The noise of ``response``'s frame values when it is ``linear``: ``{"gain", "floor"}``.
+
+    The value's variance is ``gain * (v - black) + floor``: shot noise ``k / electrons_per_unit``
+    per unit of value (``k`` the response's slope times its gain), read noise
+    ``(k * read_noise_e / electrons_per_unit)^2`` and the ADC's rounding ``step^2 / 12``. Empty
+    for the other families (their noise is not a line in the value).
+    """
+    if response.family != "linear":
+        return {}
+    step = 1.0 / ((1 << settings.bit_depth) - 1)
+    per_unit = response.slope * response.gain
+    electrons = settings.electrons_per_unit
+    if electrons <= 0:
+        return {"gain": 0.0, "floor": step * step / 12}
+    read = per_unit * settings.read_noise_e / electrons
+    return {"gain": per_unit / electrons, "floor": read * read + step * step / 12}
+
+
 def quantise(values: np.ndarray, bit_depth: int) -> np.ndarray:
     """ADC values: ``round(clip(values, 0, 1) * (2**bit_depth - 1))`` as uint16."""
     top = (1 << bit_depth) - 1

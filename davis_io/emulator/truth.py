@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from davis_io.emulator.aps import subframe_times
+from davis_io.emulator.aps import ApsSettings, linear_noise, subframe_times
 from davis_io.emulator.colorfilter import sensor_channels
 from davis_io.emulator.config import EmulatorConfig
 from davis_io.emulator.dvs import DvsPixels
@@ -93,7 +93,17 @@ def build_truth(
         path_time_us=path_time_us,
         path_c2w=trajectory.c2w(path_time_us),
         camera=config.to_json(),
-        sensor=sensor.to_json(pixels, config.dvs_step_us),
+        sensor={
+            **sensor.to_json(pixels, config.dvs_step_us),
+            "frame_noise": linear_noise(
+                sensor.response,
+                ApsSettings(
+                    sensor.response,
+                    config.gain_per_s,
+                    electrons_per_unit=ApsSettings.electrons_per_unit if config.aps_noise else 0,
+                ),
+            ),
+        },
         pixel_threshold_on=pixels.threshold_on.reshape(config.height, config.width),
         pixel_threshold_off=pixels.threshold_off.reshape(config.height, config.width),
     )

@@ -54,6 +54,9 @@ class SensorCalibration:
         cutoff_hz: the photoreceptor's cut-off frequency in bright light, or 0 when unknown.
         dead_time_us: the shortest time between two events of a pixel that must fire many
             times in a row (its refractory period), µs; 0 when unknown.
+        noise_gain: linear frames' noise variance per unit of value above the black level
+            (their shot noise), normalised units; 0 when not measured.
+        noise_floor: their noise variance at the black level (read noise and rounding).
         response_value: ``(K,)`` increasing normalised frame values of the inverse response.
         response_log_exposure: ``(K,)`` ln(relative exposure) at those values, increasing.
         pixel_factor_on: ``(H, W)`` each pixel's ON threshold over ``threshold_on`` (median
@@ -78,6 +81,8 @@ class SensorCalibration:
     response_linear: bool = False
     cutoff_hz: float = 0.0
     dead_time_us: int = 0
+    noise_gain: float = 0.0
+    noise_floor: float = 0.0
     response_value: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     response_log_exposure: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     pixel_factor_on: np.ndarray = dataclasses.field(default_factory=lambda: np.ones((0, 0)))
@@ -124,6 +129,12 @@ class SensorCalibration:
             lines.append(
                 f"pixel dead time {self.dead_time_us / 1000:.2f} ms (at most "
                 f"{1e6 / self.dead_time_us:.0f} events per second from one pixel)"
+            )
+        if self.noise_gain > 0:
+            lines.append(
+                f"frame noise: variance {self.noise_gain:.2e} x (value - black) + "
+                f"{self.noise_floor:.2e} (shot noise equals read noise "
+                f"{self.noise_floor / self.noise_gain:.4f} above black)"
             )
         if self.pixel_factor_on.size:
             spread = np.std(np.concatenate([self.pixel_factor_on, self.pixel_factor_off], None))

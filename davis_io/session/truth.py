@@ -111,8 +111,8 @@ class Truth:
         """What a perfect calibration would measure: the sensor's true values (white-box fits).
 
         The median pixel's thresholds with every pixel's factor, the events' true delay, the
-        photoreceptor's cut-off, the pixels' dead time, the response's black and clip levels
-        and its table.
+        photoreceptor's cut-off, the pixels' dead time, the response's black and clip levels,
+        its table and (linear frames) their noise.
 
         Raises:
             SessionError: this truth does not record its sensor (written by an older version).
@@ -124,6 +124,7 @@ class Truth:
         response = self.sensor["response"]
         medians = [float(np.median(t)) for t in (self.pixel_threshold_on, self.pixel_threshold_off)]
         clipped = self.crf_value < np.max(self.crf_value)
+        noise = self.sensor.get("frame_noise", {})
         return SensorCalibration(
             threshold_on=medians[0],
             threshold_off=medians[1],
@@ -133,6 +134,8 @@ class Truth:
             response_linear=response["family"] == "linear",
             cutoff_hz=float(self.sensor["dvs"]["cutoff_hz"]),
             dead_time_us=int(self.sensor.get("dead_time_us", 0)),
+            noise_gain=float(noise.get("gain", 0.0)),
+            noise_floor=float(noise.get("floor", 0.0)),
             response_value=self.crf_value[clipped],
             response_log_exposure=self.crf_log_exposure[clipped],
             pixel_factor_on=(self.pixel_threshold_on / medians[0]).astype(np.float32),

@@ -18,7 +18,11 @@ HELP = (
     "LDR brackets, scores"
 )
 
-FLAGS = {"register_test_views": "--no-registration", "dead_time": "--no-dead-time"}
+FLAGS = {
+    "register_test_views": "--no-registration",
+    "dead_time": "--no-dead-time",
+    "frame_noise": "--no-frame-noise",
+}
 """Option strings that differ from the ones derived from :class:`FitConfig`'s field names."""
 
 

@@ -100,6 +100,8 @@ class TrainingData:
         polarity_scale: the calibrated ON and OFF thresholds over ``threshold``.
         linear_levels: ``(black, saturation)`` normalised, when the calibration measured frames
             linear in exposure (a raw DAVIS frame); None otherwise.
+        noise_offset: for linear frames whose noise was measured, the value above black where
+            their shot noise equals their read noise (normalised); 0 otherwise.
         test: held-out views with truth, if any.
         truth: training-view truth, if any (emulated sessions).
     """
@@ -120,6 +122,7 @@ class TrainingData:
     dead_time_s: float = 0.0
     polarity_scale: tuple[float, float] = (1.0, 1.0)
     linear_levels: tuple[float, float] | None = None
+    noise_offset: float = 0.0
     test: TestViews | None = None
     truth: TrainTruth | None = None
 

@@ -48,6 +48,9 @@ class FitConfig:
             values state it.
         dead_time: limit the predicted events of a pixel to one per its measured dead time
             (refractory period), the rest owed to later bins.
+        frame_noise: on linear frames whose noise the calibration measured, compare frame
+            values on a scale where that noise is even (each pixel weighed by the inverse of its
+            noise variance, so the shadows count); off: plain squared errors.
         event_share: fraction of each batch drawn among pixels with events.
         validation_share: fraction of training pixels held out for the progress PSNR.
         exposures_s: exposures of the rendered LDR brackets (empty: the truth's or the
@@ -79,6 +82,7 @@ class FitConfig:
     threshold: float = 0.0
     cutoff_hz: float = 150.0
     dead_time: bool = True
+    frame_noise: bool = True
     event_share: float = 0.5
     validation_share: float = 0.01
     exposures_s: tuple[float, ...] = ()
@@ -141,6 +145,7 @@ class FitConfig:
             "threshold",
             "cutoff_hz",
             "dead_time",
+            "frame_noise",
             "event_share",
             "batch_pixels",
             "subframes",

@@ -7,7 +7,19 @@ from dataclasses import dataclass
 
 import torch
 
-__all__ = ["LossWeights", "event_loss", "hdr_tone_map", "ldr_loss", "oracle_hdr_loss", "total_loss"]
+__all__ = [
+    "NOISE_REFERENCE",
+    "LossWeights",
+    "event_loss",
+    "hdr_tone_map",
+    "ldr_loss",
+    "noise_even",
+    "oracle_hdr_loss",
+    "total_loss",
+]
+
+NOISE_REFERENCE = 0.25
+"""Value above black where :func:`noise_even` keeps the plain squared error's weight."""
 
 
 @dataclass(frozen=True)
@@ -28,6 +40,21 @@ class LossWeights:
 def ldr_loss(predicted: torch.Tensor, recorded: torch.Tensor) -> torch.Tensor:
     """Mean squared error of predicted and recorded LDR values (eq. 13, mean instead of sum)."""
     return (predicted - recorded).square().mean()
+
+
+def noise_even(values: torch.Tensor, black: float, offset: float) -> torch.Tensor:
+    """Linear frame values on a scale where their noise is the same at every level.
+
+    A raw value's variance grows with its light, ``gain * (v - black) + floor``: squared errors
+    of plain values let the bright pixels' noise drown the dark pixels' signal, and a field
+    can then be brighter than the frames in the shadows at little cost. On the scale
+    ``2 sqrt(r + o) sqrt(v - black + o)`` (``o = floor / gain``, ``r`` the
+    :data:`NOISE_REFERENCE`; Anscombe's transform of Poisson counts, shifted for the read noise)
+    the variance is the same everywhere and a squared error weighs each pixel by the inverse of
+    its noise; at ``v - black = r`` the scale's slope is 1, as the plain error's.
+    """
+    above = (values - black).clamp(min=0.0) + offset
+    return 2 * math.sqrt(NOISE_REFERENCE + offset) * torch.sqrt(above)
 
 
 def event_loss(predicted: torch.Tensor, measured: torch.Tensor) -> torch.Tensor:

@@ -24,6 +24,7 @@ from seenerf.train.losses import (
     event_loss,
     hdr_tone_map,
     ldr_loss,
+    noise_even,
     oracle_hdr_loss,
     total_loss,
 )
@@ -43,6 +44,18 @@ PLATEAU_FROM_PROGRESS = 0.5
 """Share of the run (steps or budget) before a plateau may stop it: a 10-minute fit of the
 emulated room stopped at 44 % with the rate still 2.5x its final value (5,000 steps; the held-out
 score had not gained 0.05 dB in 8 evaluations while it wobbled)."""
+
+
+def frame_scale(data: TrainingData, config: FitConfig) -> Callable[[torch.Tensor], torch.Tensor]:
+    """The scale frame values are compared on.
+
+    Noise-even (:func:`~seenerf.train.losses.noise_even`) for linear frames whose noise was
+    measured, unless ``config.frame_noise`` is off; else the values themselves.
+    """
+    if not config.frame_noise or data.linear_levels is None or data.noise_offset <= 0:
+        return lambda values: values
+    black, offset = data.linear_levels[0], data.noise_offset
+    return lambda values: noise_even(values, black, offset)
 
 
 @dataclass
@@ -129,6 +142,7 @@ class Trainer:
         self.weights = LossWeights(
             self.preset.event_weight, config.anchor_weight, self.preset.smoothness
         )
+        self.frame_scale = frame_scale(data, config)
         self._make_samplers()
         field_params = list(self.model.renderer.parameters())
         sensor_params = [
@@ -264,7 +278,8 @@ class Trainer:
             return loss, {"hdr": float(ldr.detach())}, len(origins), passes[-1].num_samples
         batch = self.frames.sample(self.preset.pixels_per_step, self.generator)
         predictions = model(batch, self.generator)
-        ldr = sum(ldr_loss(p.ldr, batch.ldr) for p in predictions)
+        recorded = self.frame_scale(batch.ldr)
+        ldr = sum(ldr_loss(self.frame_scale(p.ldr), recorded) for p in predictions)
         events = sum(
             (event_loss(p.counts, batch.bins) for p in predictions if p.counts is not None), zero
         )
