@@ -50,6 +50,11 @@ def test_the_linear_response_is_told_apart_and_its_levels_found(calibrated):
     assert linear.saturation == pytest.approx(0.95, abs=2 / 1023)  # frames clip there
     film = calibrated["film"][0]
     assert film.black_level == 0.0 and film.saturation == 1.0  # no pile-up: not claimed
+    # The noise is measured on linear frames alone (elsewhere it is no line in the value).
+    assert linear.noise_floor > 0 and "frame noise" in linear.method
+    assert all(
+        c.noise_gain == c.noise_floor == 0 for c, _, _ in calibrated.values() if c is not linear
+    )
 
 
 def test_the_inverse_response_rises_and_matches_the_true_shape(calibrated):

@@ -10,7 +10,8 @@ from seenerf.model.config import FitConfig
 from seenerf.model.presets import PRESETS, size_field
 from seenerf.model.variants import VARIANTS
 from seenerf.train.builder import build_model
-from seenerf.train.trainer import Trainer
+from seenerf.train.losses import NOISE_REFERENCE, noise_even
+from seenerf.train.trainer import Trainer, frame_scale
 
 
 def _config(**overrides):
@@ -75,6 +76,38 @@ def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked(
     assert trainer.train().skipped_steps == 0
     scene.linear_levels = None
     assert isinstance(build_model(scene, _config(), "cpu")[0].crf, RgbCrf)
+
+
+def test_noise_even_scale_evens_shot_and_read_noise():
+    # Values 0.002 and 0.5 above black with variance 1e-4 x (v - black) + 2e-7 (offset
+    # 0.002): plain standard deviations 6.3e-4 and 7.1e-3, 11x apart; on the noise-even scale
+    # they agree.
+    black, gain, floor = 0.03, 1e-4, 2e-7
+    generator = torch.Generator().manual_seed(0)
+    spreads = []
+    for above in (0.002, 0.5):
+        sd = math.sqrt(gain * above + floor)
+        values = black + above + sd * torch.randn(200_000, generator=generator, dtype=torch.float64)
+        spreads.append(float(noise_even(values, black, floor / gain).std()))
+    assert spreads[0] == pytest.approx(spreads[1], rel=0.1)
+    # The slope is 1 at NOISE_REFERENCE above black: there the plain error's weight is kept.
+    at = torch.tensor(
+        [black + NOISE_REFERENCE - 1e-6, black + NOISE_REFERENCE + 1e-6], dtype=torch.float64
+    )
+    slope = float(torch.diff(noise_even(at, black, 0.002))) / 2e-6
+    assert slope == pytest.approx(1.0, rel=1e-6)
+
+
+def test_linear_frames_of_measured_noise_are_compared_on_the_noise_even_scale():
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
+    values = torch.tensor([0.03, 0.1, 0.6])
+    assert frame_scale(scene, _config())(values) is values  # not linear: the values
+    scene.linear_levels, scene.noise_offset = (0.02, 0.9), 0.003
+    expected = 2 * math.sqrt(NOISE_REFERENCE + 0.003) * torch.sqrt(values - 0.02 + 0.003)
+    torch.testing.assert_close(frame_scale(scene, _config())(values), expected)
+    assert frame_scale(scene, _config(frame_noise=False))(values) is values
+    scene.noise_offset = 0.0  # noise not measured
+    assert frame_scale(scene, _config())(values) is values
 
 
 def test_multi_exposure_needs_and_uses_several_exposures(tiny_scene):
