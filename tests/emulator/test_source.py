@@ -237,3 +237,16 @@ def test_a_session_names_the_camera_it_was_recorded_with(tmp_path):
         del h5.attrs["camera"]  # a truth written before it said how it was recorded
     with pytest.raises(UsageError, match="does not say how it was recorded"):
         EmulatedCamera.of_session(recorded.folder)
+
+
+def test_the_truth_of_linear_frames_states_their_noise_for_white_box_fits():
+    # The named linear response: slope 0.3, 3000 electrons per unit, 4 electrons read noise:
+    # gain 0.3 / 3000 = 1e-4, floor (0.3 * 4 / 3000)^2 + (1/1023)^2 / 12 = 1.6e-7 + 7.963e-8.
+    linear = EmulatedCamera("room", **{**SMALL, "response": "linear"}).truth
+    calibration = linear.sensor_calibration()
+    assert calibration.noise_gain == pytest.approx(1e-4, rel=1e-6)
+    assert calibration.noise_floor == pytest.approx(2.3963e-7, rel=1e-4)
+    quiet = EmulatedCamera("room", **{**SMALL, "response": "linear", "aps_noise": False}).truth
+    assert quiet.sensor_calibration().noise_gain == 0  # only the rounding is left
+    film = EmulatedCamera("room", **{**SMALL, "response": "film"}).truth.sensor_calibration()
+    assert film.noise_gain == film.noise_floor == 0  # not a line in the value: not stated
