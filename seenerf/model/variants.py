@@ -66,7 +66,8 @@ class Variant:
             exposures, no events) or :data:`SHARP_HDR` (truth sharp HDR at true poses: the
             oracle).
         sensor_from_truth: the sensor's values (thresholds of every pixel, event latency,
-            cut-off) come from the emulator's truth instead of the session's calibration.
+            cut-off, dead time, linear frames' noise) come from the emulator's truth instead of
+            the session's calibration.
     """
 
     description: str
@@ -81,7 +82,7 @@ VARIANTS: dict[str, Variant] = {
     "full": Variant("See-NeRF: pixel-wise RGB CRF, event CRF with delay MLP and calibrated bins"),
     "white-box": Variant(
         "See-NeRF given the emulated sensor's true values instead of measured ones: every "
-        "pixel's thresholds, the event latency, the cut-off",
+        "pixel's thresholds, the event latency, the cut-off, the dead time, linear frames' noise",
         sensor_from_truth=True,
     ),
     "no-events": Variant("See-NeRF without the event loss", events=None),

@@ -403,7 +403,7 @@ def blind_report(document: dict) -> str:
             f"--time-budget {document['budget_s']:.0f}s` from the recording, sensor "
             "calibration and poses included; `white-box` is the same fit given the sensor's "
             "true values (every pixel's thresholds, the event latency, the cut-off, the dead "
-            "time), `oracle` "
+            "time, linear frames' noise), `oracle` "
             "the same field trained on sharp HDR at the true poses, both for as long as `full` "
             "trained. PSNR in dB at the true test poses mapped by the training cameras' "
             "similarity, HDR tone-mapped after one global scale; novel = mean of the x1/4 and "
