@@ -5,8 +5,9 @@ which grows in proportion to the signal, plus the read noise and the ADC's round
 not: ``var(v) = gain * (v - black) + floor``. In one frame the noise shows as the difference of
 a pixel from the mean of its four same-colour neighbours (two pixels away, so a Bayer mosaic's
 colours do not mix): white noise of variance ``s`` gives that difference a variance of
-``1.25 s``, and in the smoothest places of a level the scene adds little more. A blurred frame
-has many such places.
+``1.25 s``, and in the smoothest places of a level the scene adds little more (a blurred frame
+has many such places); what it does add grows with the square of the level, a third term of the
+fit that is then dropped.
 """
 
 from __future__ import annotations
@@ -34,12 +35,10 @@ class FrameNoise:
     Attributes:
         gain: variance per unit of value above black (the shot noise; 0 when none shows).
         floor: variance at the black level (read noise and rounding).
-        bands: ``(B, 2)`` each band's mean value above black and the variance measured there.
     """
 
     gain: float
     floor: float
-    bands: np.ndarray
 
     @property
     def offset(self) -> float:
@@ -66,7 +65,22 @@ def frame_noise(frames: np.ndarray, black: float, saturation: float, step: float
         The fitted line; gain 0 and the floor at the rounding's variance when the frames show
         no noise that grows with the signal.
     """
-    frames = np.asarray(frames, np.float64)
+    rounding = step * step / 12
+    bands = _band_variances(np.asarray(frames, np.float64), black, saturation, step)
+    if len(bands) < 3:
+        return FrameNoise(0.0, rounding)
+    weights = 1 / np.maximum(bands[:, 1], rounding)  # each band's relative error alike
+    design = np.column_stack([bands[:, 0], np.ones(len(bands)), bands[:, 0] ** 2])
+    gain, floor, _texture = np.linalg.lstsq(
+        design * weights[:, None], bands[:, 1] * weights, rcond=None
+    )[0]
+    if gain <= 0:
+        return FrameNoise(0.0, max(float(np.median(bands[:, 1])), rounding))
+    return FrameNoise(float(gain), max(float(floor), rounding))
+
+
+def _band_variances(frames: np.ndarray, black: float, saturation: float, step: float):
+    """``(B, 2)``: each level band's mean value above black and its noise variance."""
     centre = _shifted(frames, 0, 0)
     neighbours = [_shifted(frames, r, c) for r, c in ((-2, 0), (2, 0), (0, -2), (0, 2))]
     mean = sum(neighbours) / 4
@@ -78,7 +92,6 @@ def frame_noise(frames: np.ndarray, black: float, saturation: float, step: float
     brightest = np.maximum.reduce([centre, *neighbours]).ravel()
     usable = brightest < saturation - 2 * step
     difference, level, texture = difference[usable], level[usable], texture[usable]
-    rounding = step * step / 12
     edges = np.quantile(level, np.linspace(0, 1, LEVEL_BANDS + 1)) if len(level) else []
     bands = []
     for low, high in zip(edges[:-1], edges[1:], strict=False):
@@ -90,14 +103,4 @@ def frame_noise(frames: np.ndarray, black: float, saturation: float, step: float
         spread = 1.4826 * np.median(np.abs(kept)) + step
         kept = kept[np.abs(kept) <= 3 * spread]  # the scene's edges, not noise
         bands.append((float(np.mean(level[smooth])), float(np.mean(kept**2)) / 1.25))
-    bands = np.asarray(bands, np.float64).reshape(-1, 2)
-    if len(bands) < 3:
-        return FrameNoise(0.0, rounding, bands)
-    weights = 1 / np.maximum(bands[:, 1], rounding)  # each band's relative error alike
-    design = np.column_stack([bands[:, 0], np.ones(len(bands)), bands[:, 0] ** 2])
-    gain, floor, _texture = np.linalg.lstsq(
-        design * weights[:, None], bands[:, 1] * weights, rcond=None
-    )[0]
-    if gain <= 0:
-        return FrameNoise(0.0, max(float(np.median(bands[:, 1])), rounding), bands)
-    return FrameNoise(float(gain), max(float(floor), rounding), bands)
+    return np.asarray(bands, np.float64).reshape(-1, 2)
