@@ -97,6 +97,11 @@ class SensorCalibration:
         """The mean of the ON and OFF thresholds (one number for the event model's units)."""
         return 0.5 * (self.threshold_on + self.threshold_off)
 
+    @property
+    def noise_offset(self) -> float:
+        """Linear frames' value above black where shot noise equals read noise (0: unmeasured)."""
+        return self.noise_floor / self.noise_gain if self.noise_gain > 0 else 0.0
+
     def with_threshold(self, threshold: float) -> SensorCalibration:
         """This calibration with one stated threshold for ON and OFF and every pixel."""
         return dataclasses.replace(
@@ -134,7 +139,7 @@ class SensorCalibration:
             lines.append(
                 f"frame noise: variance {self.noise_gain:.2e} x (value - black) + "
                 f"{self.noise_floor:.2e} (shot noise equals read noise "
-                f"{self.noise_floor / self.noise_gain:.4f} above black)"
+                f"{self.noise_offset:.4f} above black)"
             )
         if self.pixel_factor_on.size:
             spread = np.std(np.concatenate([self.pixel_factor_on, self.pixel_factor_off], None))

@@ -110,9 +110,7 @@ def load_training_data(
             linear_levels=(calibration.black_level, calibration.saturation)
             if calibration.response_linear
             else None,
-            noise_offset=calibration.noise_floor / calibration.noise_gain
-            if calibration.response_linear and calibration.noise_gain > 0
-            else 0.0,
+            noise_offset=calibration.noise_offset if calibration.response_linear else 0.0,
         )
         truth = session.truth()
         if truth is not None:
