@@ -63,7 +63,8 @@ class FitConfig:
             too).
         subframes: poses per event bin in the exposure integral, interpolated between the
             latent poses (:mod:`seenerf.data.subframes`); 1 is the published b+1 latent poses,
-            more is for motion of many pixels per bin.
+            more is for motion of many pixels per bin (the event model then follows each pixel
+            through them).
     """
 
     preset: str = DEFAULT_PRESET

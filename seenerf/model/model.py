@@ -92,8 +92,7 @@ class SeeNerfModel(nn.Module):
         ldr, log_radiance = self.variant.imaging.blurry_ldr(self.crf, batch, values, log_dt)
         counts = None
         if self.event_crf is not None:
-            latent = log_radiance[:, :: batch.subframes]
-            counts = self.event_crf(latent, batch.mix, batch.exposure_s)
+            counts = self.event_crf(log_radiance, batch.mix, batch.exposure_s, batch.subframes)
         return Prediction(ldr, counts, log_radiance, num_samples)
 
     def render_log_radiance(self, origins: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:

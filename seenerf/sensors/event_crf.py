@@ -1,8 +1,9 @@
 """The event response (eqs. 9-12): filter channel, delay low-pass, counts = log change / Theta.
 
 Beyond the paper, a pixel's dead time: one that owes more events than its refractory period
-lets it fire within a bin fires what it can and owes the rest to the next bins
-(:func:`rate_limited`).
+lets it fire within a step fires what it can and owes the rest to the next steps
+(:func:`rate_limited`); with sub-frames the steps are finer than the bins, so an edge that
+crosses the pixel early in a bin is owed from then on.
 """
 
 from __future__ import annotations
@@ -75,15 +76,15 @@ def predicted_counts(filtered_log: torch.Tensor, threshold: float) -> torch.Tens
 
 
 def rate_limited(counts: torch.Tensor, cap_on: torch.Tensor, cap_off: torch.Tensor) -> torch.Tensor:
-    """Counts of pixels that fire at most ``cap`` events per bin and owe the rest to later bins.
+    """Counts of pixels that fire at most ``cap`` events per step and owe the rest to later steps.
 
     Args:
-        counts: ``(R, b)`` signed counts the light change asks for, bin by bin.
-        cap_on: ``(R,)`` or ``()``: the most ON counts one bin can hold.
+        counts: ``(R, S)`` signed counts the light change asks for, step by step.
+        cap_on: ``(R,)`` or ``()``: the most ON counts one step can hold.
         cap_off: the same for OFF counts (positive).
 
     Returns:
-        ``(R, b)`` the counts fired; what is still owed after the last bin is not in them.
+        ``(R, S)`` the counts fired; what is still owed after the last step is not in them.
     """
     owed = torch.zeros_like(counts[:, 0])
     fired = []
@@ -130,8 +131,8 @@ class EventCrf(nn.Module):
         cutoff_hz: photoreceptor cut-off f_c; tau = 1 / (2 pi f_c).
         hidden: width of the delay MLP.
         dead_time_s: a pixel's shortest interval between events; 0: no limit to its rate.
-        polarity_scale: the ON and OFF thresholds over ``threshold`` (a bin holds at most
-            ``bin / dead_time`` events, each of its polarity's threshold).
+        polarity_scale: the ON and OFF thresholds over ``threshold`` (a step holds at most
+            ``step / dead_time`` events, each of its polarity's threshold).
     """
 
     def __init__(
@@ -165,31 +166,42 @@ class EventCrf(nn.Module):
         return event_log_radiance(log_radiance, mix)
 
     def forward(
-        self, log_radiance: torch.Tensor, mix: torch.Tensor, exposure_s: torch.Tensor
+        self,
+        log_radiance: torch.Tensor,
+        mix: torch.Tensor,
+        exposure_s: torch.Tensor,
+        subframes: int = 1,
     ) -> torch.Tensor:
         """Predicted counts ``(R, b)``.
 
         Args:
-            log_radiance: ``(R, b+1, 3)``.
+            log_radiance: ``(R, b * subframes + 1, 3)``: every ``subframes``-th point is a latent
+                one, the bins' ends.
             mix: ``(R, 3)`` colour weights of each pixel.
             exposure_s: ``(R,)`` exposure of the pixel's frame; a bin lasts exposure / b.
+            subframes: points per bin. The pixel is followed from point to point (its low-pass,
+                and with a dead time the events it owes), and each bin holds what its steps
+                fired: an edge that crosses a pixel early in a bin is owed from then on, not
+                spread over the bin.
         """
         pixel = self.pixel_log_radiance(log_radiance, mix)
-        bin_s = (exposure_s / max(pixel.shape[1] - 1, 1))[:, None]
-        counts = predicted_counts(self.filtered(pixel, exposure_s, bin_s), self.threshold)
-        if self.dead_time_s <= 0:
-            return counts
-        most = bin_s[:, 0] / self.dead_time_s
-        return rate_limited(counts, most * self.polarity_scale[0], most * self.polarity_scale[1])
+        step_s = (exposure_s / max(pixel.shape[1] - 1, 1))[:, None]
+        counts = predicted_counts(self.filtered(pixel, exposure_s, step_s), self.threshold)
+        if self.dead_time_s > 0:
+            most = step_s[:, 0] / self.dead_time_s
+            counts = rate_limited(
+                counts, most * self.polarity_scale[0], most * self.polarity_scale[1]
+            )
+        return counts.reshape(counts.shape[0], -1, subframes).sum(dim=2)
 
     def filtered(
-        self, pixel: torch.Tensor, exposure_s: torch.Tensor, bin_s: torch.Tensor
+        self, pixel: torch.Tensor, exposure_s: torch.Tensor, step_s: torch.Tensor
     ) -> torch.Tensor:
         """``(R, P)`` the pixel's log radiance after the delay low-pass (unchanged with none)."""
         if self.spec.delay == "none":
             return pixel
         factor = DELAY_FACTORS[self.spec.delay](self, pixel, exposure_s)
-        epsilon = factor * bin_s / self.tau_s
+        epsilon = factor * step_s / self.tau_s
         if self.spec.domain == "linear":
             linear = torch.exp(pixel.clamp(-_LOG_LIMIT, _LOG_LIMIT))
             return torch.log(low_pass(linear, epsilon, self.spec.order).clamp(min=1e-30))

@@ -161,6 +161,24 @@ def test_event_crf_with_a_dead_time_caps_each_bin_by_polarity():
     assert free.tolist() == [pytest.approx([5.0, 0.0]), pytest.approx([-2.0, 0.0])]
 
 
+def test_event_crf_follows_a_rate_limited_pixel_between_a_bins_ends():
+    # Exposure 4 ms, b = 2, 2 sub-frames per bin -> 1 ms steps; dead time 1 ms -> 1 event per
+    # step, threshold 0.5. The light rises 2 ln in the second step of bin 0 (4 events asked):
+    # steps fire 0, 1, 1, 1 -> bins 1, 2 (one event still owed). Read at the bins' ends alone,
+    # the rise is spread over bin 0 (cap 2): 2, 2.
+    spec = EventModelSpec(delay="none")
+    crf = EventCrf(spec, threshold=0.5, dead_time_s=1e-3)
+    green = torch.tensor([[0.0, 1.0, 0.0]])
+    rise = torch.tensor([0.0, 0.0, 2.0, 2.0, 2.0])[None, :, None].expand(1, 5, 3)
+    exposure = torch.tensor([4e-3])
+    assert crf(rise, green, exposure, subframes=2).tolist() == [pytest.approx([1.0, 2.0])]
+    assert crf(rise[:, ::2], green, exposure).tolist() == [pytest.approx([2.0, 2.0])]
+    # Without a dead time the steps of a bin add up to its ends' change.
+    free = EventCrf(spec, threshold=0.5)
+    wavy = torch.tensor([0.0, 1.0, -0.5, 0.25, 2.0])[None, :, None].expand(1, 5, 3)
+    assert free(wavy, green, exposure, subframes=2).tolist() == [pytest.approx([-1.0, 5.0])]
+
+
 def test_event_pixel_sees_its_bayer_channel_or_luminance():
     log_e = torch.log(torch.tensor([[[1.0, 2.0, 4.0]]]))
     red = event_log_radiance(log_e, torch.tensor([[1.0, 0.0, 0.0]]))
