@@ -32,7 +32,7 @@ from scipy.optimize import minimize
 from davis_io.calibration.pixel_events import PixelEvents, log_blur
 from davis_io.calibration.response_fit import InverseResponse, hat_basis
 
-__all__ = ["ConsistencyProblem", "fit_pixel_factors", "fit_thresholds"]
+__all__ = ["THRESHOLD_RANGE", "ConsistencyProblem", "fit_pixel_factors", "fit_thresholds"]
 
 KNOTS = 16
 """Knots of the free inverse response."""
@@ -42,6 +42,12 @@ _SMOOTHNESS = 1e-3
 
 _FACTOR_PRIOR = 4.0
 """Shrinkage of a pixel's factors towards 1, in squared events (about 4 pairs' worth)."""
+
+THRESHOLD_RANGE = (0.01, 2.0)
+"""Contrast thresholds (ln) the fit may try: outside, the disagreement is infinite. A DVS
+threshold is a few tenths; without a ceiling a recording whose frames are too sharp to pin the
+scale let Nelder-Mead climb to 300 (a 1/16 exposure of the emulated room), where the blur
+term's exponentials overflowed and every value after was NaN."""
 
 _FACTOR_RANGE = (0.05, 3.0)
 """Bounds of a pixel's factor. Spread is absolute, not relative: an OFF threshold of 0.19 drawn
@@ -123,11 +129,18 @@ class ConsistencyProblem:
         return log_g - log_g[0]
 
     def disagreement(self, theta_on: float, theta_off: float) -> float:
-        """Mean squared residual in events (residual over the mean threshold)."""
-        if min(theta_on, theta_off) <= 0.01:
+        """Mean squared residual in events (residual over the mean threshold).
+
+        Infinite outside :data:`THRESHOLD_RANGE`, and where the blur term overflows (a pixel
+        with hundreds of events in one exposure, at a threshold far above its own).
+        """
+        low, high = THRESHOLD_RANGE
+        if min(theta_on, theta_off) <= low or max(theta_on, theta_off) >= high:
             return float("inf")
-        residual, _ = self.solve(theta_on, theta_off)
-        return float(np.mean(residual**2)) / (0.5 * (theta_on + theta_off)) ** 2
+        with np.errstate(over="ignore", invalid="ignore"):
+            residual, _ = self.solve(theta_on, theta_off)
+            value = float(np.mean(residual**2)) / (0.5 * (theta_on + theta_off)) ** 2
+        return value if np.isfinite(value) else float("inf")
 
 
 def fit_thresholds(

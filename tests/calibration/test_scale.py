@@ -22,3 +22,11 @@ def test_a_flat_profile_leaves_the_scale_free_and_says_how_wide():
     assert not free.pinned
     assert free.interval == pytest.approx((SCALES[1], SCALES[7]))
     assert "x2.00: +2.0 %" in free.describe()
+
+
+def test_scales_the_fit_may_not_try_bound_the_interval_and_leave_it_free():
+    # A fit at the top of the threshold range: every larger scale is infinitely bad.
+    rise = np.where(SCALES > 1, np.inf, 0.001)
+    profile = ScaleProfile(SCALES, rise)
+    assert profile.interval == pytest.approx((SCALES[0], 1.0))
+    assert not profile.pinned
