@@ -38,7 +38,7 @@ def event_log_radiance(log_radiance: torch.Tensor, mix: torch.Tensor) -> torch.T
     the log luminance of a monochrome pixel.
 
     Args:
-        log_radiance: ``(R, P, 3)`` log radiance at the b+1 latent poses.
+        log_radiance: ``(R, P, 3)`` log radiance at the exposure's P rendered poses.
         mix: ``(R, 3)`` colour weights of each pixel.
 
     Returns:
@@ -52,7 +52,7 @@ def low_pass(signal: torch.Tensor, epsilon: torch.Tensor, order: int = 1) -> tor
     """Cascade of ``order`` first-order filters ``s_i = (1 - eps_i) s_(i-1) + eps_i x_i``.
 
     Args:
-        signal: ``(R, P)`` samples at the latent time points.
+        signal: ``(R, P)`` samples at the rendered time points.
         epsilon: ``(R, P)`` filter coefficients in [0, 1] (clamped here); ``epsilon[:, 0]`` unused.
         order: number of cascaded stages (1 reference, 2 v2e and the paper, 4 Deblur-e).
 
