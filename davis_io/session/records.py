@@ -38,6 +38,8 @@ class SessionBins:
             the ln intensity change of each bin (events weighted by their thresholds).
         event_count: ``(F,)`` int64 events inside each exposure window.
         contrast: ``calibrated`` is in ln units (:meth:`Session.contrast_bins`), not counts.
+        settled: ``(F, b+1, H, W)`` bool, whether each pixel had fired all it owed at each
+            latent time point (:func:`davis_io.settled.settled_points`); contrast bins only.
     """
 
     b: int
@@ -47,6 +49,7 @@ class SessionBins:
     calibrated: np.ndarray
     event_count: np.ndarray
     contrast: bool = False
+    settled: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,7 @@ from davis_io.session.manifest import (
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.truth import TRUTH_DIR, Truth, load_truth
 from davis_io.session.writer import check_free_space, storage_errors
+from davis_io.settled import SLEWING_INTERVALS, settled_points
 from davis_io.types import (
     EVENT_DTYPE,
     IMU_DTYPE,
@@ -300,7 +301,8 @@ class Session(Closing):
 
         Each exposure's events are cut ``calibration.latency_us`` later than the exposure (when
         the events of its light come), each event weighs its pixel's calibrated threshold, and
-        the latent time points are moved back onto the exposure's clock. Computed, not stored.
+        the latent time points are moved back onto the exposure's clock. ``settled`` marks the
+        points where a pixel was not firing at its dead-time limit. Computed, not stored.
 
         Raises:
             SessionError: bad ``b``.
@@ -316,11 +318,15 @@ class Session(Closing):
         ):
             factors = factors if factors.shape == shape else np.ones(shape)
             sizes.append(threshold * np.asarray(factors, np.float64).reshape(pixels))
-        rows = []
+        rows, settled = [], []
+        dead_time = calibration.dead_time_us
+        margin = int(np.ceil(SLEWING_INTERVALS * dead_time))
         for start_us, end_us in zip(table.exposure_start_us, table.exposure_end_us, strict=True):
             start, end = int(start_us) + latency, int(end_us) + latency
-            window = self.events_between(start, end)
-            rows.append(bin_exposure(window, start, end, b, self.width, self.height, tuple(sizes)))
+            window = self.events_between(start - margin, end + margin)
+            row = bin_exposure(window, start, end, b, self.width, self.height, tuple(sizes))
+            rows.append(row)
+            settled.append(settled_points(window, row.split_us, self.width, self.height, dead_time))
         return SessionBins(
             b=int(b),
             split_us=np.stack([row.split_us for row in rows]) - latency,
@@ -329,6 +335,7 @@ class Session(Closing):
             calibrated=np.stack([row.calibrated for row in rows]),
             event_count=np.array([row.event_count for row in rows], np.int64),
             contrast=True,
+            settled=np.stack(settled),
         )
 
     def poses(self, b: int) -> SessionPoses | None:

@@ -88,6 +88,8 @@ class TrainingData:
         bins: ``(F, b, H, W)`` ln intensity change of each bin in units of ``threshold``: the
             events weighted by their pixel's calibrated thresholds, with the h() offsets.
         bins_raw: ``(F, b, H, W)`` signed integer event counts without offsets.
+        settled: ``(F, b+1, H, W)`` bool, where a pixel had fired all it owed at a latent time
+            point (:func:`davis_io.settled.settled_points`); None: everywhere.
         c2w: ``(F, b+1, 4, 4)`` camera-to-world per latent time point, OpenCV axes.
         intrinsics: ``(4,)`` fx, fy, cx, cy in pixels.
         bounds: ``(2,)`` near and far depth of the scene along the optical axis.
@@ -116,6 +118,7 @@ class TrainingData:
     bounds: np.ndarray
     mix: np.ndarray
     channel: np.ndarray
+    settled: np.ndarray | None = None
     monochrome: bool = False
     threshold: float = 0.3
     cutoff_hz: float = 0.0
@@ -162,6 +165,8 @@ class TrainingData:
             "mix": (height, width, 3),
             "channel": (height, width),
         }
+        if self.settled is not None:
+            expected["settled"] = (frames, b + 1, height, width)
         for name, shape in expected.items():
             value = getattr(self, name)
             if value.shape != shape or b < 1:

@@ -24,6 +24,8 @@ class FrameSampler:
         exclude: flat indices ``position_in_frames * H * W + pixel`` never drawn (validation).
         device: torch device.
         subframes: sub-frames per bin of the exposure integral (:mod:`seenerf.data.subframes`).
+        settled: batches carry where each pixel was settled (``data.settled``); False: every
+            latent point counts as settled, so each bin is compared alone.
     """
 
     def __init__(
@@ -35,6 +37,7 @@ class FrameSampler:
         exclude: np.ndarray | None = None,
         device: str = "cpu",
         subframes: int = 1,
+        settled: bool = True,
     ):
         self.height, self.width = data.image_size
         self.frames = torch.as_tensor(frames, dtype=torch.long)
@@ -48,6 +51,9 @@ class FrameSampler:
         self.mix = torch.as_tensor(data.mix, device=device).reshape(-1, 3)
         self.channel = torch.as_tensor(data.channel, device=device).reshape(-1)
         self.bins = torch.as_tensor(data.bins if calibrated else data.bins_raw, device=device)
+        shape = (data.num_frames, data.num_bins + 1, self.height, self.width)
+        known = data.settled if settled and data.settled is not None else np.ones(shape, bool)
+        self.settled = torch.as_tensor(known, device=device)
         self.device = device
         allowed = np.ones(len(frames) * self.height * self.width, bool)
         allowed[np.asarray(exclude if exclude is not None else [], np.int64)] = False
@@ -98,6 +104,7 @@ class FrameSampler:
             self.channel[pixel],
             self.ldr[frame, v, u],
             self.bins[frame, :, v, u],
+            self.settled[frame, :, v, u],
             self.subframes,
         )
 

@@ -99,6 +99,7 @@ def load_training_data(
             bounds=poses.bounds.astype(np.float32),
             mix=mix,
             channel=channel,
+            settled=bins.settled[usable],
             monochrome=not session.color_filter.is_color,
             threshold=calibration.threshold,
             cutoff_hz=calibration.cutoff_hz,

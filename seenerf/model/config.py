@@ -46,8 +46,10 @@ class FitConfig:
             the field's log contrast).
         cutoff_hz: photoreceptor cut-off frequency of the delay filter, unless the sensor's
             values state it.
-        dead_time: limit the predicted events of a pixel to one per its measured dead time
-            (refractory period), the rest owed to later bins.
+        dead_time: use the pixels' measured dead time (refractory period): predicted events
+            of a pixel are limited to one per dead time, the rest owed to later bins, and
+            counts are compared between the latent points where the pixel was not firing at
+            that limit (:mod:`davis_io.settled`); off: every bin alone, unlimited.
         frame_noise: on linear frames whose noise the calibration measured, compare frame
             values on a scale where that noise is even (each pixel weighed by the inverse of its
             noise variance, so the shadows count); off: plain squared errors.

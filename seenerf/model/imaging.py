@@ -42,6 +42,8 @@ class RayBatch:
         exposure_s: ``(R,)`` exposure time of the pixel's frame.
         mix: ``(R, 3)`` colour weights of the pixel; ``channel`` ``(R,)`` its response channel.
         ldr: ``(R,)`` recorded value in [0, 1]; ``bins`` ``(R, b)`` event counts.
+        settled: ``(R, b+1)`` bool, where the pixel had fired all it owed at a latent pose (the
+            event loss compares counts between such poses).
         subframes: m; every m-th pose is a latent pose, where the event model looks.
     """
 
@@ -53,6 +55,7 @@ class RayBatch:
     channel: torch.Tensor
     ldr: torch.Tensor
     bins: torch.Tensor
+    settled: torch.Tensor
     subframes: int = 1
 
 

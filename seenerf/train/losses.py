@@ -57,11 +57,38 @@ def noise_even(values: torch.Tensor, black: float, offset: float) -> torch.Tenso
     return 2 * math.sqrt(NOISE_REFERENCE + offset) * torch.sqrt(above)
 
 
-def event_loss(predicted: torch.Tensor, measured: torch.Tensor) -> torch.Tensor:
-    """Mean over pixels and bins of the squared count error (eq. 14); zero for an empty batch."""
+def event_loss(
+    predicted: torch.Tensor, measured: torch.Tensor, settled: torch.Tensor
+) -> torch.Tensor:
+    """Squared count error over the spans between a pixel's settled latent points (eq. 14).
+
+    A pixel that was still firing at its dead-time limit at a bin's end had not fired all it
+    owed, so its count of that bin falls short and the next one's holds the rest: the bins on
+    either side are compared as one span, whose count is whole. Spans that start or end where
+    the pixel was not settled (the exposure's first or last point) are left out. With every
+    point settled this is the mean over pixels and bins of each bin's squared error.
+
+    Args:
+        predicted: ``(R, b)`` predicted counts.
+        measured: ``(R, b)`` recorded counts.
+        settled: ``(R, b+1)`` bool, whether each pixel was settled at each latent point.
+
+    Returns:
+        The sum of the spans' squared errors over ``R * b``; zero for an empty batch.
+    """
     if predicted.numel() == 0:
         return predicted.new_zeros(())
-    return (predicted - measured).square().mean()
+    residual = torch.cumsum(predicted - measured, dim=1)
+    at_last = torch.zeros_like(residual[:, 0])
+    started = settled[:, 0]
+    total = predicted.new_zeros(())
+    for point in range(1, settled.shape[1]):
+        here = residual[:, point - 1]
+        ends = started & settled[:, point]
+        total = total + torch.where(ends, here - at_last, 0.0).square().sum()
+        at_last = torch.where(settled[:, point], here, at_last)
+        started = started | settled[:, point]
+    return total / predicted.numel()
 
 
 def hdr_tone_map(hdr: torch.Tensor, scale: torch.Tensor | float) -> torch.Tensor:

@@ -174,6 +174,7 @@ class Trainer:
             self.validation.numpy(),
             self.device,
             self.config.subframes,
+            self.config.dead_time,
         )
         self.oracle = None
         if self.model.variant.supervision.truth_hdr:
@@ -281,7 +282,12 @@ class Trainer:
         recorded = self.frame_scale(batch.ldr)
         ldr = sum(ldr_loss(self.frame_scale(p.ldr), recorded) for p in predictions)
         events = sum(
-            (event_loss(p.counts, batch.bins) for p in predictions if p.counts is not None), zero
+            (
+                event_loss(p.counts, batch.bins, batch.settled)
+                for p in predictions
+                if p.counts is not None
+            ),
+            zero,
         )
         anchor = model.crf.anchor_loss() if model.crf is not None else zero
         loss = total_loss(ldr, events, anchor, smooth, self.weights)

@@ -54,3 +54,28 @@ def test_synthetic_scene_ideal_events_match_the_latent_radiance():
     # bins are the log change of each pixel's own channel divided by 0.3
     assert np.allclose(scene.bins * 0.3, np.diff(log_pixel, axis=1), atol=1e-5)
     assert np.allclose(scene.weights.sum(1), 1.0)
+
+
+@pytest.mark.parametrize("use_settled", [True, False])
+def test_batches_carry_where_each_pixel_was_settled(use_settled):
+    import dataclasses
+
+    import torch
+
+    from seenerf.data.batching import FrameSampler
+
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
+    settled = np.ones((3, 3, 8, 10), bool)
+    settled[1, 2, 5, 7] = settled[2, 0, 0, 3] = False
+    data = dataclasses.replace(scene, settled=settled).validate()
+    sampler = FrameSampler(data, np.arange(3), settled=use_settled)
+    batch = sampler.batch(torch.tensor([1, 2, 0]), torch.tensor([5 * 10 + 7, 3, 5 * 10 + 7]))
+    expected = [[1, 1, 0], [0, 1, 1], [1, 1, 1]] if use_settled else np.ones((3, 3))
+    assert batch.settled.tolist() == np.asarray(expected, bool).tolist()
+
+
+def test_settled_points_must_match_the_bins():
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
+    scene.settled = np.ones((3, 2, 8, 10), bool)
+    with pytest.raises(TrainingDataError, match=r"settled has shape \(3, 2, 8, 10\)"):
+        scene.validate()

@@ -10,7 +10,7 @@ from seenerf.model.config import FitConfig
 from seenerf.model.presets import PRESETS, size_field
 from seenerf.model.variants import VARIANTS
 from seenerf.train.builder import build_model
-from seenerf.train.losses import NOISE_REFERENCE, noise_even
+from seenerf.train.losses import NOISE_REFERENCE, event_loss, noise_even
 from seenerf.train.trainer import Trainer, frame_scale
 
 
@@ -76,6 +76,26 @@ def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked(
     assert trainer.train().skipped_steps == 0
     scene.linear_levels = None
     assert isinstance(build_model(scene, _config(), "cpu")[0].crf, RgbCrf)
+
+
+@pytest.mark.parametrize(
+    ("settled", "expected"),
+    [
+        # Every point settled: the mean of the bins' squared errors 0, 1, 1, 0.
+        ([1, 1, 1, 1, 1], 2 / 4),
+        # Bins 1 and 2 compared as one span: their errors +1 and -1 cancel.
+        ([1, 1, 0, 1, 1], 0.0),
+        # Bins 0-1 as one span (error 1), bin 2 alone (1), bin 3 left out (its end unsettled).
+        ([1, 0, 1, 1, 0], 2 / 4),
+        # Nothing settled before the last point: no span has two settled ends.
+        ([0, 0, 0, 0, 1], 0.0),
+    ],
+)
+def test_event_loss_compares_counts_between_settled_points(settled, expected):
+    predicted = torch.tensor([[1.0, 2.0, 3.0, 4.0]])
+    measured = torch.tensor([[1.0, 1.0, 4.0, 4.0]])
+    loss = event_loss(predicted, measured, torch.tensor([settled], dtype=torch.bool))
+    assert float(loss) == pytest.approx(expected)
 
 
 def test_noise_even_scale_evens_shot_and_read_noise():

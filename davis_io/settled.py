@@ -1,0 +1,61 @@
+"""Where a pixel has fired what it owes: the time points at which its event count is whole.
+
+A DVS pixel fires at most once per dead time (its refractory period). One swept by a change
+larger than that rate allows fires at the limit and owes the rest, so the events counted
+between two time points fall short of the change between them whenever the pixel was still
+paying at either point. Such a pixel's events follow each other at about the dead time: where
+the two events on either side of a time point are that close, the pixel was firing as fast as
+it can there. Between two points where it was not, it had caught up at both ends, so its count
+holds the whole change in between, however fast the light moved in the meantime.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["SLEWING_INTERVALS", "settled_points"]
+
+SLEWING_INTERVALS = 2.0
+"""Events on either side of a time point closer than this many dead times: the pixel was firing
+at its limit there (a limited pixel's intervals spread around one dead time)."""
+
+
+def settled_points(
+    events: np.ndarray, times_us: np.ndarray, width: int, height: int, dead_time_us: float
+) -> np.ndarray:
+    """Whether each pixel had fired all it owed at each time point.
+
+    Args:
+        events: ``EVENT_DTYPE`` events sorted by time, reaching at least
+            ``SLEWING_INTERVALS * dead_time_us`` beyond the first and last point.
+        times_us: ``(P,)`` time points, µs.
+        width: sensor width.
+        height: sensor height.
+        dead_time_us: the pixels' dead time; 0 (none measured): every point is settled.
+
+    Returns:
+        ``(P, height, width)`` bool, False where the pixel's last event at or before the point
+        and its first event after it are at most ``SLEWING_INTERVALS * dead_time_us`` apart.
+    """
+    times_us = np.asarray(times_us, np.int64)
+    settled = np.ones((len(times_us), height * width), bool)
+    if dead_time_us <= 0 or len(events) < 2:
+        return settled.reshape(len(times_us), height, width)
+    pixel = events["y"].astype(np.int64) * width + events["x"]
+    order = np.argsort(pixel, kind="stable")  # each pixel's events stay in time order
+    pixel, event_us = pixel[order], events["t"][order].astype(np.int64)
+    first = np.searchsorted(pixel, np.arange(height * width), side="left")
+    stop = np.searchsorted(pixel, np.arange(height * width), side="right")
+    with_two = np.flatnonzero(stop - first >= 2)
+    origin = event_us.min()
+    span = int(event_us.max() - origin) + 1
+    # One sorted key per event: its pixel's block of time, then its time in the block.
+    key = pixel * span + (event_us - origin)
+    for index, point in enumerate(times_us):
+        query = with_two * span + min(max(int(point - origin), -1), span - 1)
+        after = np.searchsorted(key, query, side="right")
+        inside = (after > first[with_two]) & (after < stop[with_two])
+        pair = after[inside]
+        gap = event_us[pair] - event_us[pair - 1]
+        settled[index, with_two[inside]] = gap > SLEWING_INTERVALS * dead_time_us
+    return settled.reshape(len(times_us), height, width)
