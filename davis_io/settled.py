@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from davis_io.pixel_trains import pixel_trains
+
 __all__ = ["SLEWING_INTERVALS", "settled_points"]
 
 SLEWING_INTERVALS = 2.0
@@ -37,25 +39,18 @@ def settled_points(
         ``(P, height, width)`` bool, False where the pixel's last event at or before the point
         and its first event after it are at most ``SLEWING_INTERVALS * dead_time_us`` apart.
     """
-    times_us = np.asarray(times_us, np.int64)
     settled = np.ones((len(times_us), height * width), bool)
     if dead_time_us <= 0 or len(events) < 2:
         return settled.reshape(len(times_us), height, width)
-    pixel = events["y"].astype(np.int64) * width + events["x"]
-    order = np.argsort(pixel, kind="stable")  # each pixel's events stay in time order
-    pixel, event_us = pixel[order], events["t"][order].astype(np.int64)
-    first = np.searchsorted(pixel, np.arange(height * width), side="left")
-    stop = np.searchsorted(pixel, np.arange(height * width), side="right")
-    with_two = np.flatnonzero(stop - first >= 2)
-    origin = event_us.min()
-    span = int(event_us.max() - origin) + 1
-    # One sorted key per event: its pixel's block of time, then its time in the block.
-    key = pixel * span + (event_us - origin)
-    for index, point in enumerate(times_us):
-        query = with_two * span + min(max(int(point - origin), -1), span - 1)
-        after = np.searchsorted(key, query, side="right")
-        inside = (after > first[with_two]) & (after < stop[with_two])
-        pair = after[inside]
-        gap = event_us[pair] - event_us[pair - 1]
-        settled[index, with_two[inside]] = gap > SLEWING_INTERVALS * dead_time_us
+    trains = pixel_trains(
+        events["y"].astype(np.int64) * width + events["x"],
+        events["t"].astype(np.int64),
+        height * width,
+    )
+    last = len(trains.time_us) - 1
+    for index, point in enumerate(np.asarray(times_us, np.int64)):
+        near = trains.around(float(point))
+        gap = trains.time_us[np.minimum(near.after, last)] - trains.time_us[near.before]
+        limited = near.has_before & near.has_after & (gap <= SLEWING_INTERVALS * dead_time_us)
+        settled[index] = ~limited
     return settled.reshape(len(times_us), height, width)

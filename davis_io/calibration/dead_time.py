@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from davis_io.pixel_trains import pixel_trains
+
 __all__ = ["DEAD_TIME_PERCENTILE", "dead_time_us"]
 
 DEAD_TIME_PERCENTILE = 1.0
@@ -35,9 +37,7 @@ def dead_time_us(times_us: np.ndarray, x: np.ndarray, y: np.ndarray, width: int)
     """
     count = min(len(times_us), MAX_EVENTS)
     pixel = y[:count].astype(np.int64) * width + x[:count]
-    order = np.argsort(pixel, kind="stable")  # each pixel's events stay in time order
-    pixel, times = pixel[order], np.asarray(times_us[:count], np.int64)[order]
-    intervals = np.diff(times)[pixel[1:] == pixel[:-1]]
+    intervals = pixel_trains(pixel, np.asarray(times_us[:count], np.int64)).intervals()
     if len(intervals) == 0:
         return 0
     return int(round(float(np.percentile(intervals, DEAD_TIME_PERCENTILE))))

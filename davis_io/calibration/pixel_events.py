@@ -37,13 +37,12 @@ from functools import cached_property
 
 import numpy as np
 
+from davis_io.pixel_trains import PixelTrains
+
 __all__ = ["EventPath", "LogBlur", "PixelEvents", "event_path", "log_blur", "pixel_events"]
 
 _BLOCK = 1 << 20
 """Pieces summed at a time by :func:`log_blur`."""
-
-_TIME_BITS = 36
-"""Bits of a knot's time in its sort key (half microseconds: 9.5 hours from the first knot)."""
 
 
 @dataclass(frozen=True)
@@ -57,7 +56,6 @@ class EventPath:
             differences within a pixel mean anything).
         off: the same for OFF levels.
         pixel_count: P.
-        origin_us: time of the sort keys' zero, before every knot.
     """
 
     pixel: np.ndarray
@@ -65,41 +63,37 @@ class EventPath:
     on: np.ndarray
     off: np.ndarray
     pixel_count: int
-    origin_us: float
-
-    def _key(self, pixel: np.ndarray, time_us: np.ndarray | float) -> np.ndarray:
-        ticks = np.clip(np.rint(2 * (np.asarray(time_us) - self.origin_us)), 0, 2**_TIME_BITS - 1)
-        return (pixel << _TIME_BITS) | ticks.astype(np.int64)
 
     @cached_property
-    def _keys(self) -> np.ndarray:
-        return self._key(self.pixel, self.time_us)
+    def _trains(self) -> PixelTrains:
+        # Already in train order: the knots' indices are the trains'.
+        order = np.arange(len(self.pixel))
+        return PixelTrains(self.pixel, self.time_us, order, self.pixel_count, tick_us=0.5)
 
-    @cached_property
+    @property
     def pixels(self) -> np.ndarray:
         """``(P,)`` int64 every pixel, ``0 .. P-1``."""
-        return np.arange(self.pixel_count, dtype=np.int64)
+        return self._trains.pixels
 
     def read(self, time_us: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every pixel's ON and OFF levels at ``time_us`` ``(P,)``, and its first knot after it.
 
         A pixel without knots after ``time_us`` gets the next pixel's first knot.
         """
-        every = self.pixels
-        after = np.searchsorted(self._keys, self._key(every, time_us), side="right")
+        near = self._trains.around(time_us)
         if len(self.pixel) == 0:
-            return np.zeros(self.pixel_count), np.zeros(self.pixel_count), after
-        before, later = np.maximum(after - 1, 0), np.minimum(after, len(self.pixel) - 1)
-        has_before = (after > 0) & (self.pixel[before] == every)
-        has_after = (after < len(self.pixel)) & (self.pixel[later] == every)
-        both = has_before & has_after
+            return np.zeros(self.pixel_count), np.zeros(self.pixel_count), near.after
+        before, later = near.before, np.minimum(near.after, len(self.pixel) - 1)
+        both = near.has_before & near.has_after
         span = np.where(both, self.time_us[later] - self.time_us[before], 1.0)
         part = np.where(both, (time_us - self.time_us[before]) / span, 0.0)
         levels = []
         for level in (self.on, self.off):
-            value = np.where(has_before, level[before], np.where(has_after, level[later], 0.0))
+            value = np.where(
+                near.has_before, level[before], np.where(near.has_after, level[later], 0.0)
+            )
             levels.append(np.where(both, value + part * (level[later] - level[before]), value))
-        return levels[0], levels[1], after
+        return levels[0], levels[1], near.after
 
 
 def event_path(
@@ -146,8 +140,7 @@ def event_path(
     ):
         column[at], column[lead], column[mid] = event, before, middle
     knot_pixel[at], knot_pixel[lead], knot_pixel[mid] = pixel, pixel[first], pixel[turn]
-    origin = float(time.min()) - 2.0 if len(time) else 0.0
-    return EventPath(knot_pixel, knots[0], knots[1], knots[2], pixel_count, origin)
+    return EventPath(knot_pixel, knots[0], knots[1], knots[2], pixel_count)
 
 
 @dataclass(frozen=True)

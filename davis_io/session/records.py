@@ -39,7 +39,7 @@ class SessionBins:
         event_count: ``(F,)`` int64 events inside each exposure window.
         contrast: ``calibrated`` is in ln units (:meth:`Session.contrast_bins`), not counts.
         settled: ``(F, b+1, H, W)`` bool, whether each pixel had fired all it owed at each
-            latent time point (:func:`davis_io.settled.settled_points`); contrast bins only.
+            latent time point (:func:`davis_io.settled.settled_points`); None unless asked.
     """
 
     b: int

@@ -296,13 +296,16 @@ class Session(Closing):
         arrays = {name: group[name][:count] for name in _BINS_FIELDS}
         return SessionBins(b=int(b), **arrays)
 
-    def contrast_bins(self, b: int, calibration: SensorCalibration) -> SessionBins:
+    def contrast_bins(
+        self, b: int, calibration: SensorCalibration, *, settled: bool = False
+    ) -> SessionBins:
         """Bins for ``b`` in light time, whose ``contrast`` is the ln change of each bin.
 
         Each exposure's events are cut ``calibration.latency_us`` later than the exposure (when
         the events of its light come), each event weighs its pixel's calibrated threshold, and
-        the latent time points are moved back onto the exposure's clock. ``settled`` marks the
-        points where a pixel was not firing at its dead-time limit. Computed, not stored.
+        the latent time points are moved back onto the exposure's clock. With ``settled`` the
+        bins mark the points where a pixel was not firing at its dead-time limit (read from
+        events two dead times beyond the exposure). Computed, not stored.
 
         Raises:
             SessionError: bad ``b``.
@@ -318,15 +321,18 @@ class Session(Closing):
         ):
             factors = factors if factors.shape == shape else np.ones(shape)
             sizes.append(threshold * np.asarray(factors, np.float64).reshape(pixels))
-        rows, settled = [], []
+        rows, points = [], []
         dead_time = calibration.dead_time_us
-        margin = int(np.ceil(SLEWING_INTERVALS * dead_time))
+        margin = int(np.ceil(SLEWING_INTERVALS * dead_time)) if settled else 0
         for start_us, end_us in zip(table.exposure_start_us, table.exposure_end_us, strict=True):
             start, end = int(start_us) + latency, int(end_us) + latency
             window = self.events_between(start - margin, end + margin)
             row = bin_exposure(window, start, end, b, self.width, self.height, tuple(sizes))
             rows.append(row)
-            settled.append(settled_points(window, row.split_us, self.width, self.height, dead_time))
+            if settled:
+                points.append(
+                    settled_points(window, row.split_us, self.width, self.height, dead_time)
+                )
         return SessionBins(
             b=int(b),
             split_us=np.stack([row.split_us for row in rows]) - latency,
@@ -335,7 +341,7 @@ class Session(Closing):
             calibrated=np.stack([row.calibrated for row in rows]),
             event_count=np.array([row.event_count for row in rows], np.int64),
             contrast=True,
-            settled=np.stack(settled),
+            settled=np.stack(points) if settled else None,
         )
 
     def poses(self, b: int) -> SessionPoses | None:

@@ -79,7 +79,7 @@ def load_training_data(
             )
         calibration = _calibration(session, sensor_from_truth, threshold)
         table = session.frames_table()
-        bins = session.contrast_bins(b, calibration)
+        bins = session.contrast_bins(b, calibration, settled=True)
         c2w = _poses_at(poses, session.bins(b).split_us, bins.split_us)
         usable = np.flatnonzero(keep_lost | ~np.asarray(table.events_lost, bool))
         if len(usable) == 0:
