@@ -1,8 +1,9 @@
 import numpy as np
 import pytest
-from event_contrast import agreement, log_changes, sensor_values
+from event_contrast import agreement, log_changes, sensor_values, settled_spans, with_true_parts
 
 from davis_io.emulator import EmulatedCamera
+from davis_io.session import SensorCalibration
 from davis_io.session.recorder import record
 
 SMALL = dict(width=64, height=48, focal_px=52.0, frames=2, test_views=1, exposure_us=40_000)
@@ -79,3 +80,42 @@ def test_bins_read_as_a_fit_reads_them_carry_an_ideal_pixels_contrast(tmp_path):
     assert 0.88 < clean < 1.05
     # The noisy preset's refractory period and low-pass lose a third, whatever the calibration.
     assert slope("noisy") < clean - 0.15
+
+
+def test_spans_run_between_settled_points():
+    # Two pixels, b = 3. Pixel 0 settled everywhere: its three bins are three spans. Pixel 1
+    # not settled at points 1 and 2: one span from point 0 to 3, its bins summed.
+    seen = np.array([[0.0, 0.0], [1.0, 2.0], [3.0, 5.0], [6.0, 9.0]])
+    counted = np.array([[0.5, 1.0], [1.0, 1.0], [1.5, 4.0]])
+    settled = np.array([[True, True], [True, False], [True, False], [True, True]])
+    true, implied = settled_spans(seen, counted, settled)
+    assert sorted(zip(true.tolist(), implied.tolist(), strict=True)) == [
+        (1.0, 0.5),
+        (2.0, 1.0),
+        (3.0, 1.5),
+        (9.0, 6.0),
+    ]
+    # Unsettled at the first point: pixel 1's span starts where it settles (point 3), no span.
+    settled[0, 1] = False
+    true, _ = settled_spans(seen, counted, settled)
+    assert sorted(true.tolist()) == [1.0, 2.0, 3.0]
+
+
+def test_parts_of_a_calibration_come_from_the_truth():
+    measured = SensorCalibration(0.3, 0.2, latency_us=9000, pixel_factor_on=np.full((2, 2), 0.9))
+    truth = SensorCalibration(0.4, 0.25, latency_us=3000, pixel_factor_on=np.full((2, 2), 1.1))
+    mixed = with_true_parts(measured, truth, ("latency", "factors"))
+    assert (mixed.threshold_on, mixed.threshold_off, mixed.latency_us) == (0.3, 0.2, 3000)
+    assert mixed.pixel_factor_on.tolist() == [[1.1, 1.1], [1.1, 1.1]]
+    mixed = with_true_parts(measured, truth, ("thresholds",))
+    assert (mixed.threshold_on, mixed.threshold_off, mixed.latency_us) == (0.4, 0.25, 9000)
+    with pytest.raises(ValueError, match="unknown calibration parts"):
+        with_true_parts(measured, truth, ("gain",))
+
+
+def test_bins_over_settled_spans_of_ideal_pixels_carry_their_contrast(tmp_path):
+    folder = recorded(tmp_path / "clean", "clean")
+    true, implied, threshold = log_changes(
+        folder, 4, 2, None, calibration=sensor_values(folder, "truth"), spans=True
+    )
+    assert 0.88 < agreement(true[0], implied, threshold)["slope"] < 1.05
