@@ -24,7 +24,9 @@ class SeeNerfError(SeecapError):
 
 
 class ConfigError(SeeNerfError):
-    """A preset, variant or configuration value is unknown or out of range."""
+    """A preset, variant or configuration value is unknown or out of range (a usage error)."""
+
+    exit_status = 2
 
 
 class TrainingDataError(SeeNerfError):

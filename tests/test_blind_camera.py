@@ -130,3 +130,34 @@ def test_nerfstudio_export_reads_back_in_its_own_conventions(twins, tmp_path):
     assert (u, v) == pytest.approx((fx * 0.3 / 4.0 + cx, fy * -0.2 / 4.0 + cy))
     image = cv2.imread(str(path.parent / first["file_path"]), cv2.IMREAD_UNCHANGED)
     assert image.shape == (130, 173)  # monochrome latent frames stay grey
+
+
+def _exr_pixels(path):
+    with OpenEXR.File(str(path)) as exr:
+        return {name: channel.pixels.copy() for name, channel in exr.channels().items()}
+
+
+def test_a_saved_run_renders_and_scores_in_a_new_process_as_the_fit_did(twins):
+    import subprocess
+    import sys
+
+    emulated, _ = twins
+    result = fit_session(
+        emulated, FitConfig(steps=3, warm_steps=10), run_name="saved", log=lambda line: None
+    )
+    run = result.run_dir
+    seecap = [sys.executable, "-c", "import sys; from davis_io.cli import main; sys.exit(main())"]
+    subprocess.run([*seecap, "render", str(run)], check=True)
+    subprocess.run([*seecap, "eval", str(run)], check=True, capture_output=True)
+    fitted = sorted((run / "renders" / "hdr").glob("*.exr"))
+    assert fitted
+    for path in fitted:
+        again = _exr_pixels(run / "held-out" / "renders" / "hdr" / path.name)
+        for name, pixels in _exr_pixels(path).items():
+            assert np.array_equal(pixels, again[name]), (path.name, name)
+    for path in sorted((run / "renders" / "ldr").rglob("*.png")):
+        again = run / "held-out" / path.relative_to(run)
+        assert np.array_equal(cv2.imread(str(path), -1), cv2.imread(str(again), -1)), path
+    scored = json.loads((run / "metrics.json").read_text())
+    assert scored["hdr"] == result.metrics["hdr"]
+    assert scored["ldr"] == result.metrics["ldr"]

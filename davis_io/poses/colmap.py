@@ -19,7 +19,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pycolmap
 
 from davis_io.errors import DavisIOError
 from davis_io.geometry import (
@@ -42,11 +41,23 @@ __all__ = [
 DATABASE_NAME = "database.db"
 SEED = 0
 
-if threading.current_thread() is threading.main_thread():
-    # pycolmap installs glog's failure handler for SIGTERM when imported: a plain `kill` then
-    # printed the native stack of a process that did nothing wrong. SIGTERM ends the process
-    # quietly again (exit 143); the verbs that save work on SIGTERM install their own handler.
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+def _import_pycolmap():
+    """pycolmap, imported without losing the SIGTERM handler in place before it.
+
+    pycolmap installs glog's failure handler for SIGTERM when imported: a plain ``kill`` then
+    printed the native stack of a process that did nothing wrong, and the verb's own handler
+    (its one line and exit 143) was gone. The handler before the import is put back.
+    """
+    before = signal.getsignal(signal.SIGTERM)
+    import pycolmap
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if before is None else before)
+    return pycolmap
+
+
+pycolmap = _import_pycolmap()
 
 
 class ColmapError(DavisIOError):

@@ -15,6 +15,7 @@ import numpy as np
 
 from davis_io.errors import SessionError
 from davis_io.session.layout import EVENT_FIELDS, H5_NAME, create_image_dataset
+from davis_io.session.lock import writer_lock
 from davis_io.session.manifest import (
     STATUS_INTERRUPTED,
     STATUS_RECORDING,
@@ -189,10 +190,19 @@ def repair_session(path: Path | str) -> RepairReport:
     ``recording``. The repair copies every complete record into a fresh ``session.h5`` (trimming
     rows written after the last complete frame) and marks the manifest ``interrupted``.
 
+    The repair holds the session's writer lock: a recording still running is refused, not cut.
+
     Raises:
         SessionError: not a session, or the data cannot be read.
+        SessionBusy: another process writes the session (a live recording).
     """
     folder = Path(path)
+    read_manifest(folder)  # not a session: say so before creating a lock in the folder
+    with writer_lock(folder, "repairing the session"):
+        return _repair(folder)
+
+
+def _repair(folder: Path) -> RepairReport:
     manifest = read_manifest(folder)
     status_before = manifest.status
     with Session.open(folder) as session:

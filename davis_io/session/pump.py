@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from davis_io.bins import ExposureBins, bin_exposure
-from davis_io.errors import DavisIOError
 from davis_io.session.manifest import DropCounters
 from davis_io.session.status import frame_warnings
 from davis_io.session.sync import ClosedWindow, ExposureSync
@@ -79,7 +78,7 @@ class Outcome:
     limit_reached: bool = False
     source_error: BaseException | None = None
     storage_error: OSError | None = None
-    write_error: DavisIOError | None = None
+    write_error: Exception | None = None
     writer_done: threading.Event = field(default_factory=threading.Event)
 
     @property
@@ -166,7 +165,7 @@ def write_packets(
                 outcome.limit_reached = state.consume(*item)
             except OSError as error:
                 outcome.storage_error = error
-            except DavisIOError as error:
+            except Exception as error:  # noqa: BLE001 - any failure ends the recording, named
                 outcome.write_error = error
             if outcome.writer_failed or outcome.limit_reached:
                 stop.set()
@@ -174,7 +173,7 @@ def write_packets(
             state.finish()
     except OSError as error:
         outcome.storage_error = error
-    except DavisIOError as error:
+    except Exception as error:  # noqa: BLE001 - any failure ends the recording, named
         outcome.write_error = error
     finally:
         state.close()

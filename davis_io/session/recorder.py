@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
-from davis_io.errors import SessionError
+from davis_io.errors import SessionError, describe_error
 from davis_io.session.defaults import DEFAULT_BINS
-from davis_io.session.folder import check_limits, check_preview, prepare_session_folder
+from davis_io.session.folder import check_limits, check_preview, new_session_folder
 from davis_io.session.layout import H5_NAME
 from davis_io.session.manifest import (
     MANIFEST_NAME,
@@ -113,25 +113,25 @@ def record(
 
     Raises:
         UsageError: bad limits, or the folder exists and ``overwrite`` is False.
+        SessionBusy: another process writes the session in ``out_dir`` (it is left as it is).
         RecordingError: the source or the disk failed; the session is closed, marked
             interrupted, and everything written before the failure is readable.
     """
     check_limits(bins, frames, duration_us)
     preview_path = check_preview(preview)
-    folder = prepare_session_folder(Path(out_dir), overwrite=overwrite)
     started = datetime.now(UTC).isoformat(timespec="seconds")
-    with source:
+    with new_session_folder(Path(out_dir), overwrite=overwrite) as folder, source:
         manifest = SessionManifest.from_source(
             source.info, b=bins, exposure_requested_us=exposure_us, start_time_utc=started
         )
-        write_manifest(folder, manifest)
         run = _Run(source, folder, manifest, queue_packets)
+        write_manifest(folder, manifest)
         if drop_when_full is None:
             drop_when_full = source.info.origin == "usb"
         with _signals_stop(run):
             run.start(drop_when_full=drop_when_full, frames=frames, duration_us=duration_us)
             run.supervise(status_callback, preview_path)
-    return run.finish()
+        return run.finish()
 
 
 _STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -313,7 +313,7 @@ class _Run:
         if storage_error is not None:
             return f"{_describe_storage_error(storage_error, self.folder)}. {kept}"
         if outcome.write_error is not None:
-            return f"could not store the data: {outcome.write_error}. {kept}"
+            return f"could not store the data: {describe_error(outcome.write_error)}. {kept}"
         if outcome.source_error is not None:
             error = outcome.source_error
             return f"the source failed: {type(error).__name__}: {error}. {kept}"

@@ -55,8 +55,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Make each session ready and fit it; print the scores (a table for several); 0 if all fit."""
+    from davis_io.session.folder import plain_name
     from seenerf.model.config import load_config
 
+    if args.run is not None:
+        plain_name(args.run, "--run")
     if args.config is not None:
         config = load_config(args.config)
     else:

@@ -33,8 +33,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--out",
         default=None,
-        help="output folder inside the run (default: held-out, or path with --path); the fit's "
-        "own renders/ are never overwritten",
+        help="name of an output folder inside the run (default: held-out, or path with "
+        "--path); the fit's own renders/ are never overwritten",
     )
 
 

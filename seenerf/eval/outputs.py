@@ -13,7 +13,16 @@ from seenerf.eval.views import PAPER_EXPOSURES_S, render_views, write_views
 from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
 
-__all__ = ["render_outputs"]
+__all__ = ["bracket_exposures", "render_outputs"]
+
+
+def bracket_exposures(config: FitConfig, data: TrainingData) -> tuple[float, ...]:
+    """The LDR exposures a run renders: the configured ones, else the truth's, else the paper's."""
+    if config.exposures_s:
+        return tuple(config.exposures_s)
+    if data.test is not None:
+        return tuple(float(exposure) for exposure in data.test.exposures_s)
+    return PAPER_EXPOSURES_S
 
 
 def render_outputs(
@@ -28,11 +37,7 @@ def render_outputs(
     headline.
     """
     poses, similarity = test_poses_in_fit_frame(data, model.variant.supervision.truth_hdr)
-    exposures = config.exposures_s or (
-        tuple(float(e) for e in data.test.exposures_s)
-        if data.test is not None
-        else PAPER_EXPOSURES_S
-    )
+    exposures = bracket_exposures(config, data)
     views = render_views(model, poses, data.intrinsics, data.image_size, exposures, data.monochrome)
     write_views(
         views,

@@ -9,28 +9,43 @@ from seenerf.eval.metrics import hdr_metrics, ldr_metrics, log_contrast, residua
 from seenerf.eval.perceptual import lpips_scorer
 from seenerf.eval.views import RenderedViews
 
-__all__ = ["format_scores", "score_views"]
+__all__ = ["format_scores", "score_views", "truth_pairs"]
+
+
+def truth_pairs(rendered_s: tuple[float, ...], truth_s: np.ndarray) -> dict[str, tuple[int, int]]:
+    """``{exposure: (render index, truth index)}`` of the rendered exposures the truth holds.
+
+    Renders and truth are paired by exposure time (to a relative 1e-6), never by position: a
+    bracket asked for in another order, or with exposures the truth lacks, is scored right.
+    """
+    pairs = {}
+    for index, exposure in enumerate(rendered_s):
+        found = np.flatnonzero(np.isclose(truth_s, exposure, rtol=1e-6, atol=0.0))
+        if len(found):
+            pairs[f"{exposure:g}"] = (index, int(found[0]))
+    return pairs
 
 
 def score_views(views: RenderedViews, data: TrainingData, *, psnr_only: bool = False) -> dict:
     """PSNR / SSIM of HDR (tone-mapped after one scale; per-channel and raw beside) and of LDR.
 
-    The novel-exposure score is the mean over the bracket's second and fourth exposures (the
-    paper's protocol). ``residual_blur`` measures how sharp the views at the bracket's middle
-    exposure are. LPIPS is added per exposure only when its weights are on this machine;
-    ``lpips`` says which. With ``psnr_only`` the HDR (one scale), LDR and novel-exposure PSNRs
-    alone, the SSIMs NaN: a second look at the same views from other poses.
+    Each rendered exposure is scored against the truth's image at the same exposure (one the
+    truth lacks is not scored). The novel-exposure score is the mean over the truth bracket's
+    second and fourth exposures (the paper's protocol); ``residual_blur`` measures how sharp
+    the views at the bracket's middle exposure are. LPIPS is added per exposure only when its
+    weights are on this machine; ``lpips`` says which. With ``psnr_only`` the HDR (one scale),
+    LDR and novel-exposure PSNRs alone, the SSIMs NaN: a second look at the same views from
+    other poses.
     """
     test = data.test
     truth_hdr = list(test.hdr)
     structural = not psnr_only
+    pairs = truth_pairs(views.exposures_s, np.asarray(test.exposures_s, dtype=float))
     scores = {"hdr": hdr_metrics(views.hdr, truth_hdr, "global", structural), "ldr": {}}
-    for index, exposure in enumerate(views.exposures_s):
-        truth_ldr = list(test.ldr[:, index])
-        scores["ldr"][f"{exposure:g}"] = ldr_metrics(views.ldr[index], truth_ldr, structural)
-    novel = [
-        scores["ldr"][f"{views.exposures_s[i]:g}"] for i in (1, 3) if i < len(views.exposures_s)
-    ]
+    for key, (rendered, truth) in pairs.items():
+        scores["ldr"][key] = ldr_metrics(views.ldr[rendered], list(test.ldr[:, truth]), structural)
+    bracket = [f"{exposure:g}" for exposure in np.sort(np.asarray(test.exposures_s, float))]
+    novel = [scores["ldr"][bracket[i]] for i in (1, 3) if i < len(bracket) and bracket[i] in pairs]
     scores["novel_exposure"] = {
         "psnr": float(np.mean([m["psnr"] for m in novel])) if novel else float("nan"),
         "ssim": float(np.mean([m["ssim"] for m in novel])) if novel else float("nan"),
@@ -41,13 +56,15 @@ def score_views(views: RenderedViews, data: TrainingData, *, psnr_only: bool = F
     scores["hdr_unaligned"] = hdr_metrics(views.hdr, truth_hdr, align="none")
     scores["log_contrast"] = log_contrast(np.stack(views.hdr), np.stack(truth_hdr))
     lpips, scores["lpips"] = lpips_scorer()
-    for index, exposure in enumerate(views.exposures_s if lpips is not None else ()):
-        truth_ldr = list(test.ldr[:, index])
-        scores["ldr"][f"{exposure:g}"]["lpips"] = float(
-            np.mean([lpips(p, t) for p, t in zip(views.ldr[index], truth_ldr, strict=True)])
+    for key, (rendered, truth) in pairs.items() if lpips is not None else ():
+        truth_ldr = list(test.ldr[:, truth])
+        scores["ldr"][key]["lpips"] = float(
+            np.mean([lpips(p, t) for p, t in zip(views.ldr[rendered], truth_ldr, strict=True)])
         )
-    middle = len(views.exposures_s) // 2
-    scores["residual_blur"] = residual_blur(views.ldr[middle], list(test.ldr[:, middle]))
+    middle = bracket[len(bracket) // 2] if bracket else None
+    if middle in pairs:
+        rendered, truth = pairs[middle]
+        scores["residual_blur"] = residual_blur(views.ldr[rendered], list(test.ldr[:, truth]))
     scores["render_s_per_view"] = views.render_s
     return scores
 

@@ -135,10 +135,14 @@ class OccupancyGrid:
         density = torch.cat([density_fn(chunk) for chunk in points.split(32768)]).cpu()
         density = density.reshape(self.density.shape)
         previous = torch.where(torch.isinf(self.density), density, self.density * decay)
-        self.density = torch.maximum(previous, density)
-        cell = 2.0 / self.resolution
-        self.occupied = (self.density * cell > self.threshold) & self.visible
+        self.set_density(torch.maximum(previous, density))
         return float(self.occupied.float().mean())
+
+    def set_density(self, density: torch.Tensor) -> None:
+        """Take ``density`` (a refresh's, or a checkpoint's) and mark the occupied cells."""
+        self.density = density
+        cell = 2.0 / self.resolution
+        self.occupied = (density * cell > self.threshold) & self.visible
 
     def lookup(self, points: torch.Tensor) -> torch.Tensor:
         """Occupancy ``(P,)`` bool of box points; points outside the box are empty."""

@@ -80,8 +80,7 @@ def load_checkpoint(path: Path, trainer) -> None:
     trainer.optimizer.load_state_dict(state["optimizer"])
     grid = trainer.model.renderer.grid
     if grid is not None and state["grid_density"].numel():
-        grid.density = state["grid_density"]
-        grid.occupied = grid.density * (2.0 / grid.resolution) > grid.threshold
+        grid.set_density(state["grid_density"])
     trainer.generator.set_state(state["generator"])
     summary = trainer.summary
     summary.steps, summary.elapsed_s = int(state["steps"]), float(state["elapsed_s"])
@@ -100,5 +99,4 @@ def load_model_state(path: Path, model) -> None:
     _load_weights(path, model, state["model"])
     grid = model.renderer.grid
     if grid is not None and state["grid_density"].numel():
-        grid.density = state["grid_density"]
-        grid.occupied = grid.density * (2.0 / grid.resolution) > grid.threshold
+        grid.set_density(state["grid_density"])

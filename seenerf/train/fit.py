@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import shutil
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -11,10 +10,11 @@ from pathlib import Path
 import torch
 
 from davis_io.session import DEFAULT_BINS, Session, output_errors, writer_lock
-from davis_io.session.lock import LOCK_NAME
+from davis_io.session.folder import empty_folder, plain_name
 from seenerf.data.arrays import TrainingData
 from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
+from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
@@ -52,20 +52,29 @@ def session_bins(session_dir: Path | str, config: FitConfig) -> int:
 
 
 def run_folder(session_dir: Path | str, config: FitConfig, run_name: str | None) -> Path:
-    """``session/fit/<run>/``: the run's name, or ``<preset>-<variant>`` by default."""
-    return Path(session_dir) / "fit" / (run_name or f"{config.preset}-{config.variant}")
+    """``session/fit/<run>/``: the run's name, or ``<preset>-<variant>`` by default.
+
+    Raises:
+        UsageError: ``run_name`` is not a plain folder name (a separator, ``..``, absolute).
+    """
+    name = plain_name(run_name, "--run") if run_name is not None else None
+    return Path(session_dir) / "fit" / (name or f"{config.preset}-{config.variant}")
 
 
 def start_over(run_dir: Path) -> None:
-    """Remove a run's checkpoint and outputs so that its next fit starts from scratch."""
+    """Remove a run's checkpoint and outputs so that its next fit starts from scratch.
+
+    Only what lies inside the run folder goes; a run folder that is a symbolic link is refused.
+    """
+    if run_dir.is_symlink():
+        raise CheckpointError(
+            f"{run_dir} is a symbolic link: --fresh empties only a run folder of the session's "
+            "own; remove the link or choose another --run"
+        )
     if not run_dir.is_dir():
         return
     with writer_lock(run_dir, f"clearing {run_dir.name}"):
-        for child in run_dir.iterdir():
-            if child.is_dir():
-                shutil.rmtree(child)
-            elif child.name != LOCK_NAME:
-                child.unlink()
+        empty_folder(run_dir)
 
 
 def fit_session(
@@ -181,6 +190,11 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         f"trained {summary.steps} steps in {summary.elapsed_s:.0f} s ({summary.stopped}); "
         f"{summary.rays_per_s:.0f} rays/s"
     )
+    if summary.skipped_steps:
+        log(
+            f"warning: {summary.skipped_steps} of {summary.steps} steps were skipped: their loss "
+            "was not finite"
+        )
     training_curves(run_dir / "training.png", summary.history)
     metrics = render_outputs(trainer.model, data, config, run_dir)
     metrics["training"] = {

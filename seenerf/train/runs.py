@@ -9,13 +9,14 @@ from pathlib import Path
 import numpy as np
 
 from davis_io.geometry import OPENCV_TO_OPENGL
+from davis_io.session.folder import plain_name
 from seenerf.data.arrays import TrainingData
 from seenerf.data.frames import test_poses_in_fit_frame
 from seenerf.data.session import load_training_data
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
-from seenerf.eval.outputs import render_outputs
-from seenerf.eval.views import PAPER_EXPOSURES_S, render_views, write_views
+from seenerf.eval.outputs import bracket_exposures, render_outputs
+from seenerf.eval.views import render_views, write_views
 from seenerf.model.config import FitConfig, load_config
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.variants import get_variant
@@ -111,13 +112,18 @@ def render_run(
 
     The views go to ``run_dir/out_name`` (default ``held-out`` or ``path``), never into the
     fit's own ``renders/``.
+
+    Raises:
+        davis_io.errors.UsageError: ``out_name`` is not a plain folder name.
     """
+    if out_name is not None:
+        plain_name(out_name, "--out")
     run = open_run(run_dir)
     if path is None:
         poses, _ = test_poses_in_fit_frame(run.data, run.model.variant.supervision.truth_hdr)
     else:
         poses = orbit_poses(run.data) if path == "orbit" else read_path(Path(path))
-    exposures = exposures_s or run.config.exposures_s or PAPER_EXPOSURES_S
+    exposures = exposures_s or bracket_exposures(run.config, run.data)
     out_name = out_name or ("held-out" if path is None else "path")
     views = render_views(
         run.model,

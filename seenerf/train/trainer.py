@@ -14,7 +14,7 @@ import torch
 
 from seenerf.data.arrays import TrainingData
 from seenerf.data.batching import FrameSampler, OracleSampler
-from seenerf.errors import TrainingStopped
+from seenerf.errors import TrainingDataError, TrainingStopped
 from seenerf.eval.metrics import psnr
 from seenerf.model.config import FitConfig
 from seenerf.train.builder import build_model, resolve_device
@@ -39,6 +39,9 @@ GRID_WARMUP_STEPS = 50
 CHECKPOINT_EVERY_S = 60.0
 """Seconds of training between checkpoints besides those at every evaluation: a killed fit
 loses at most this much."""
+
+SKIPPED_IN_A_ROW_LIMIT = 50
+"""Steps in a row without a finite loss after which a fit stops as failed: nothing is learned."""
 
 PLATEAU_FROM_PROGRESS = 0.5
 """Share of the run (steps or budget) before a plateau may stop it: a 10-minute fit of the
@@ -158,6 +161,7 @@ class Trainer:
         )
         self.summary = TrainSummary()
         self.evals_since_best = 0
+        self.last_step_skipped = False
 
     def _make_samplers(self) -> None:
         data, rng = self.data, np.random.default_rng(self.config.seed)
@@ -199,9 +203,11 @@ class Trainer:
         start, start_step, rays = time.perf_counter(), self.summary.steps, 0
         base_elapsed = self.summary.elapsed_s
         saved_at = start
+        skipped_before = self.summary.skipped_steps
         while self.summary.steps < self.total_steps:
             rays += self._step()
             self.summary.steps += 1
+            skipped_before = self._check_skipped(skipped_before)
             self.summary.elapsed_s = base_elapsed + time.perf_counter() - start
             if self.on_step is not None:
                 self.on_step(self)
@@ -227,6 +233,26 @@ class Trainer:
         self.summary.rays_per_s = rays / max(time.perf_counter() - start, 1e-9)
         self._checkpoint()
         return self.summary
+
+    def _check_skipped(self, skipped_before: int) -> int:
+        """Fail once :data:`SKIPPED_IN_A_ROW_LIMIT` steps in a row had no finite loss.
+
+        Returns:
+            The skipped count a run of skipped steps began at (the current count after a
+            finite step).
+
+        Raises:
+            TrainingDataError: the limit was reached: the options or the data make every loss
+                NaN or infinite.
+        """
+        skipped = self.summary.skipped_steps
+        if skipped - skipped_before < SKIPPED_IN_A_ROW_LIMIT:
+            return skipped_before if self.last_step_skipped else skipped
+        raise TrainingDataError(
+            f"the loss was not finite in {SKIPPED_IN_A_ROW_LIMIT} steps in a row (to step "
+            f"{self.summary.steps}; {skipped} skipped in all), so nothing was learned: check the "
+            "fit's options (weights, thresholds) and the session (seecap inspect)"
+        )
 
     def _training_budget(self) -> float:
         """Training seconds the budget leaves after the caller's (poses); inf without one."""
@@ -254,7 +280,8 @@ class Trainer:
             self.model.renderer.grid.update(self.model.renderer.density, self.generator)
         loss, terms, rays, samples = self._loss()
         self.optimizer.zero_grad(set_to_none=True)
-        if not torch.isfinite(loss):
+        self.last_step_skipped = not bool(torch.isfinite(loss))
+        if self.last_step_skipped:
             self.summary.skipped_steps += 1
             return rays
         loss.backward()

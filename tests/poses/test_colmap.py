@@ -72,6 +72,21 @@ def test_sigterm_ends_a_process_that_imported_pycolmap_without_a_native_stack_du
     assert "stack trace" not in done.stderr and "Aborted" not in done.stderr
 
 
+def test_a_verbs_sigterm_handler_survives_importing_pycolmap():
+    # The verb installs its handler first (seecap's main does), then imports COLMAP's module.
+    handled = (
+        "import os, signal, sys, time\n"
+        "signal.signal(signal.SIGTERM, lambda *_: (print('handled', flush=True), sys.exit(143)))\n"
+        "import davis_io.poses.colmap\n"
+        "os.kill(os.getpid(), signal.SIGTERM)\n"
+        "time.sleep(5)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", handled], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 143 and done.stdout == "handled\n"
+
+
 @pytest.mark.parametrize(("focal", "plausible"), [(289.0, True), (34.0, False), (14813.0, False)])
 def test_a_camera_outside_colmaps_own_bounds_is_not_plausible(focal, plausible):
     reconstruction = pycolmap.Reconstruction()

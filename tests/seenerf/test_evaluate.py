@@ -180,10 +180,41 @@ def test_a_psnr_only_score_has_the_full_scores_psnrs_and_no_ssim():
         list(noisy),
         [list(np.clip(noisy * e, 0, 1)) for e in exposures],
     )
-    data = SimpleNamespace(test=SimpleNamespace(hdr=truth_hdr, ldr=truth_ldr))
+    data = SimpleNamespace(
+        test=SimpleNamespace(hdr=truth_hdr, ldr=truth_ldr, exposures_s=exposures)
+    )
     full, light = score_views(views, data), score_views(views, data, psnr_only=True)
     assert light["hdr"]["psnr"] == full["hdr"]["psnr"] and math.isnan(light["hdr"]["ssim"])
     # Novel exposures: the mean of the 2nd and 4th (0.04 s and 0.6 s).
     novel = (full["ldr"]["0.04"]["psnr"] + full["ldr"]["0.6"]["psnr"]) / 2
     assert light["novel_exposure"]["psnr"] == pytest.approx(novel) == full["novel_exposure"]["psnr"]
     assert 0 < full["hdr"]["ssim"] < 1 and "residual_blur" not in light
+
+
+def test_renders_meet_the_truth_at_their_own_exposure_whatever_the_order():
+    rng = np.random.default_rng(6)
+    exposures = (0.01, 0.04, 0.15, 0.6, 2.4)
+    truth_hdr = rng.uniform(0.05, 4.0, (2, 24, 32, 3))
+    truth_ldr = np.clip(truth_hdr[:, None] * np.asarray(exposures)[None, :, None, None, None], 0, 1)
+    data = SimpleNamespace(
+        test=SimpleNamespace(hdr=truth_hdr, ldr=truth_ldr, exposures_s=exposures)
+    )
+    noisy = truth_hdr * rng.uniform(0.95, 1.05, truth_hdr.shape)
+
+    def views_at(asked):
+        ldr = [list(np.clip(noisy * e, 0, 1)) for e in asked]
+        return RenderedViews(np.tile(np.eye(4), (2, 1, 1)), asked, list(noisy), ldr)
+
+    ordered = score_views(views_at(exposures), data)
+    shuffled = score_views(views_at((0.6, 0.01, 2.4, 0.15, 0.04)), data)
+    for key, score in ordered["ldr"].items():
+        assert shuffled["ldr"][key]["psnr"] == score["psnr"]
+    assert shuffled["novel_exposure"] == ordered["novel_exposure"]
+    assert shuffled["residual_blur"] == ordered["residual_blur"]
+    # A near-perfect render: every exposure scores high once paired with its own truth.
+    assert min(score["psnr"] for score in shuffled["ldr"].values()) > 25
+    # An exposure the truth lacks is rendered but not scored; novel keeps what it has.
+    partial = score_views(views_at((0.6, 0.3)), data)
+    assert list(partial["ldr"]) == ["0.6"]
+    assert partial["novel_exposure"]["psnr"] == ordered["ldr"]["0.6"]["psnr"]
+    assert "residual_blur" not in partial

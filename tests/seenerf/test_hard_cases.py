@@ -96,3 +96,41 @@ def test_other_imaging_models_survive_saturation(variant):
     scene.ldr[0] = 1.0
     scene.ldr[1] = 0.0
     _check(scene, variant=variant)
+
+
+def test_a_fit_whose_every_loss_is_nan_fails_instead_of_reporting_success(monkeypatch):
+    from seenerf.errors import TrainingDataError
+    from seenerf.train.trainer import SKIPPED_IN_A_ROW_LIMIT
+
+    config = FitConfig(steps=200, batch_pixels=16, warm_steps=0, validation_share=0.0)
+    trainer = Trainer(_scene(), config, log=lambda line: None)
+    real_loss = trainer._loss
+    calls = []
+
+    def sometimes_nan():
+        loss, terms, rays, samples = real_loss()
+        calls.append(1)
+        # Steps 1-10 finite, then NaN for ever: the limit counts from step 11.
+        return (loss if len(calls) <= 10 else loss * float("nan")), terms, rays, samples
+
+    monkeypatch.setattr(trainer, "_loss", sometimes_nan)
+    with pytest.raises(TrainingDataError, match=f"not finite in {SKIPPED_IN_A_ROW_LIMIT} steps"):
+        trainer.train()
+    assert trainer.summary.steps == 10 + SKIPPED_IN_A_ROW_LIMIT
+    assert trainer.summary.skipped_steps == SKIPPED_IN_A_ROW_LIMIT
+
+
+def test_isolated_nan_steps_are_skipped_and_counted(monkeypatch):
+    config = FitConfig(steps=30, batch_pixels=16, warm_steps=0, validation_share=0.0)
+    trainer = Trainer(_scene(), config, log=lambda line: None)
+    real_loss = trainer._loss
+    calls = []
+
+    def every_third_nan():
+        loss, terms, rays, samples = real_loss()
+        calls.append(1)
+        return (loss * float("nan") if len(calls) % 3 == 0 else loss), terms, rays, samples
+
+    monkeypatch.setattr(trainer, "_loss", every_third_nan)
+    summary = trainer.train()
+    assert summary.steps == 30 and summary.skipped_steps == 10
