@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from davis_io.bins import ExposureBins, bin_exposure
+from davis_io.session.event_order import EventOrder
 from davis_io.session.manifest import DropCounters
 from davis_io.session.status import frame_warnings
 from davis_io.session.sync import ClosedWindow, ExposureSync
@@ -198,6 +199,7 @@ class _WriterState:
         self.last_flush = time.monotonic()
         self.binner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="seecap-binner")
         self.binning: deque[tuple[ClosedWindow, Future | None]] = deque()
+        self.order = EventOrder()
         self.backlog: Callable[[], float] = lambda: 0.0
         """Fill of the packet queue, 0..1."""
 
@@ -207,18 +209,16 @@ class _WriterState:
             self.sync.note_loss()
             self.progress.drops.source_events += packet.dropped_events
         self._note_source(packet)
-        self.sync.add_events(packet.events)  # checks the order before anything is stored
+        self._add_events(self.order.accept(packet.events))
         for records in (packet.imu, packet.triggers):
             if len(records):
                 self.sync.note_time(records["t"].max())
-        self.writer.write_events(packet.events)
         self.writer.write_imu(packet.imu)
         self.writer.write_triggers(packet.triggers)
         for frame in packet.frames:
             if self.max_frames is None or self.frames_accepted < self.max_frames:
                 self.sync.add_frame(frame)
                 self.frames_accepted += 1
-        self._note_time(packet)
         self._submit(self.sync.settle())
         self._store(wait=False)
         if time.monotonic() - self.last_flush > _FLUSH_INTERVAL_S:
@@ -227,7 +227,11 @@ class _WriterState:
         return self._limit_reached()
 
     def finish(self) -> None:
-        """Store every waiting frame (flagged when its window was not fully recorded)."""
+        """Store the last events and every waiting frame (flagged when its window was cut)."""
+        self._add_events(self.order.finish())
+        note = self.order.note()
+        if note is not None:
+            self.progress.source_notes.append(note)
         self._submit(self.sync.settle(final=True))
         self._store(wait=True)
         self.writer.flush()
@@ -242,12 +246,15 @@ class _WriterState:
         if packet.truncated_at is not None and progress.truncated_at is None:
             progress.truncated_at = packet.truncated_at
 
-    def _note_time(self, packet: Packet) -> None:
+    def _add_events(self, events: np.ndarray) -> None:
+        """Events in time order: to the exposure sync (which checks the order), then stored."""
+        self.sync.add_events(events)
+        self.writer.write_events(events)
         self.progress.events = self.writer.events_received
-        if len(packet.events):
+        if len(events):
             if self.progress.first_t_us is None:
-                self.progress.first_t_us = int(packet.events["t"][0])
-            self.progress.latest_t_us = int(packet.events["t"][-1])
+                self.progress.first_t_us = int(events["t"][0])
+            self.progress.latest_t_us = int(events["t"][-1])
 
     def _submit(self, closed: list[ClosedWindow]) -> None:
         for window in closed:

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from session_fakes import ListSource, synthetic_packets
 
@@ -241,3 +242,65 @@ def test_a_failure_in_the_writer_thread_fails_the_recording(tmp_path, monkeypatc
         assert "ValueError" in session.manifest.stop_reason
     # The CLI: exit 1 and its line, never 0.
     assert main(["record", "--emulate", "room", "--frames", "2", "--out", str(tmp_path / "t")]) == 1
+
+
+def test_longest_ordered_by_hand():
+    from davis_io.session.event_order import longest_ordered
+
+    # 900 is a jump ahead, 5 went back: dropping those two keeps the rest in order.
+    times = np.array([10, 20, 900, 30, 5, 40, 40, 50])
+    assert longest_ordered(times, 0).tolist() == [1, 1, 0, 1, 0, 1, 1, 1]
+    # Nothing may be earlier than the floor: the newest time already accepted.
+    assert longest_ordered(np.array([10, 20, 30]), 15).tolist() == [0, 1, 1]
+    assert longest_ordered(np.array([], dtype=np.int64), 0).tolist() == []
+
+
+def test_a_glitch_at_a_packets_end_is_judged_by_the_next_packet():
+    from davis_io.session.event_order import HELD_EVENTS, EventOrder
+    from davis_io.types import EVENT_DTYPE
+
+    def events(times):
+        array = np.zeros(len(times), EVENT_DTYPE)
+        array["t"] = times
+        return array
+
+    order = EventOrder()
+    first = order.accept(events([*range(100, 300), 10**9]))  # the last one jumps ahead
+    second = order.accept(events(range(300, 500)))
+    kept = np.concatenate([first, second, order.finish()])["t"]
+    assert len(first) == 201 - HELD_EVENTS
+    assert kept.tolist() == list(range(100, 500)) and order.dropped == 1
+    assert "dropped 1 events" in order.note()
+
+
+def _aedat2_with_flipped_time_bytes(path, count, share, seed=1):
+    """DVS events of a DAVIS346 as AEDAT 2.0 records; ``share`` of them get one time bit flipped."""
+    header = (
+        b"#!AER-DAT2.0\r\n# AEChip: eu.seebetter.ini.chips.davis.Davis346B\r\n"
+        b"#End Of ASCII Header\r\n"
+    )
+    rng = np.random.default_rng(seed)
+    times = np.sort(rng.integers(1_000, 2_001_000, count))
+    x, y, p = rng.integers(0, 346, count), rng.integers(0, 260, count), rng.integers(0, 2, count)
+    records = np.zeros(count, [("address", ">i4"), ("t", ">i4")])
+    # davis-protocol.md §6.1: X field 345 - x at bit 12, Y field 259 - y at bit 22, ON bit 11.
+    records["address"] = ((259 - y) << 22) | ((345 - x) << 12) | (p << 11)
+    records["t"] = times
+    raw = bytearray(records.tobytes())
+    for index in rng.choice(count, int(count * share), replace=False):
+        raw[8 * index + 4 + rng.integers(0, 4)] ^= 1 << rng.integers(0, 8)
+    path.write_bytes(header + bytes(raw))
+
+
+def test_one_percent_of_corrupted_times_keeps_98_percent_of_the_events(tmp_path):
+    from davis_io.aedat import open_recording
+
+    path = tmp_path / "glitches.aedat"
+    _aedat2_with_flipped_time_bytes(path, 100_000, 0.01)
+    result = record(open_recording(path), tmp_path / "s")
+    assert result.status == "complete"
+    with Session.open(tmp_path / "s") as session:
+        times = session.events_between(0, 2**62)["t"]
+        assert session.event_count >= 98_000 and np.all(np.diff(times) >= 0)
+        assert 0 < 100_000 - session.event_count <= 1_000
+        assert any("timestamp glitches" in note for note in session.manifest.source_notes)

@@ -1,0 +1,110 @@
+"""Timestamp glitches: events whose time goes back or jumps ahead are dropped, the rest kept.
+
+A real DAVIS stream (or a file with a damaged byte) now and then carries an event whose time
+is wrong: far in the future, or behind the events before it. Refusing the whole recording for
+it loses everything; keeping it breaks the one increasing clock a session needs. The events
+kept are the longest run of the stream in time order (the longest non-decreasing subsequence
+of its times), so an isolated glitch costs its own event only: one far ahead is dropped rather
+than every event after it. The last few events of each packet are held until the next packet
+shows whether they were glitches.
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+
+import numpy as np
+
+from davis_io.types import EVENT_DTYPE, empty_events
+
+__all__ = ["EventOrder", "longest_ordered"]
+
+HELD_EVENTS = 64
+"""Events at the end of a packet kept back until the next packet: a glitch there can only be
+told from the events that follow it."""
+
+
+def longest_ordered(times: np.ndarray, floor: int) -> np.ndarray:
+    """Mask of the longest non-decreasing run of ``times`` (a subsequence) at ``floor`` or later.
+
+    Args:
+        times: ``(N,)`` int64 event times, µs.
+        floor: no kept time may be earlier (the newest time already accepted).
+
+    Returns:
+        ``(N,)`` bool, True for the events kept. An ordered input is kept whole without a search.
+    """
+    times = np.asarray(times, dtype=np.int64)
+    if len(times) == 0 or (times[0] >= floor and np.all(times[1:] >= times[:-1])):
+        return np.ones(len(times), dtype=bool)
+    candidates = np.flatnonzero(times >= floor)
+    # Patience sorting: tails[k] is the smallest last time of a kept run of length k + 1.
+    tails: list[int] = []
+    tail_index: list[int] = []
+    previous = np.full(len(times), -1, dtype=np.int64)
+    for index in candidates.tolist():
+        value = int(times[index])
+        length = bisect_right(tails, value)
+        previous[index] = tail_index[length - 1] if length else -1
+        if length == len(tails):
+            tails.append(value)
+            tail_index.append(index)
+        else:
+            tails[length], tail_index[length] = value, index
+    keep = np.zeros(len(times), dtype=bool)
+    index = tail_index[-1] if tail_index else -1
+    while index >= 0:
+        keep[index] = True
+        index = int(previous[index])
+    return keep
+
+
+class EventOrder:
+    """Pass a stream's event packets on in time order, dropping the glitched events.
+
+    Attributes:
+        dropped: events dropped so far.
+        first_dropped_t_us: the time stamped on the first dropped event (None before one).
+    """
+
+    def __init__(self):
+        self._held = empty_events()
+        self._floor = np.iinfo(np.int64).min
+        self.dropped = 0
+        self.first_dropped_t_us: int | None = None
+
+    def accept(self, events: np.ndarray) -> np.ndarray:
+        """The events of this packet (and of the held ones) that are now known to be in order."""
+        if len(events) == 0:
+            return events
+        joined = np.concatenate([self._held, events]) if len(self._held) else events
+        kept = self._keep(joined)
+        self._held = kept[-HELD_EVENTS:]
+        released = kept[:-HELD_EVENTS] if len(kept) > HELD_EVENTS else kept[:0]
+        if len(released):
+            self._floor = int(released["t"][-1])
+        return released
+
+    def finish(self) -> np.ndarray:
+        """The events still held at the end of the stream."""
+        released, self._held = self._held, empty_events()
+        return released
+
+    def note(self) -> str | None:
+        """One line on what was dropped, for the session's source notes (None: nothing was)."""
+        if not self.dropped:
+            return None
+        return (
+            f"dropped {self.dropped} events whose time went back or jumped ahead of the events "
+            f"around them (timestamp glitches; the first stamped {self.first_dropped_t_us} µs)"
+        )
+
+    def _keep(self, events: np.ndarray) -> np.ndarray:
+        keep = longest_ordered(events["t"], self._floor)
+        if keep.all():
+            return events
+        dropped = events[~keep]
+        if self.first_dropped_t_us is None:
+            self.first_dropped_t_us = int(dropped["t"][0])
+        self.dropped += len(dropped)
+        return np.ascontiguousarray(events[keep]).astype(EVENT_DTYPE, copy=False)
