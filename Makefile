@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 TORCH_PIN ?= torch==2.13.0
 DEMO_DIR ?= demo-session
 
-.PHONY: install demo test bench bench-quick bench-blind bench-cluster lint clean
+.PHONY: install demo test fuzz bench bench-quick bench-blind bench-cluster lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -28,6 +28,10 @@ test: $(STAMP)
 	$(BIN)/python -m pytest -q; status=$$?; \
 	if [ $$status -eq 5 ]; then echo "make test: pytest collected no tests" >&2; exit 1; fi; \
 	exit $$status
+
+# Every verb's parser driven by 500 hostile command lines each (the suite runs 100 of them).
+fuzz: $(STAMP)
+	SEECAP_FUZZ_EXAMPLES=500 $(BIN)/python -m pytest -q tests/test_cli_fuzz.py
 
 bench-quick: $(STAMP)
 	$(BIN)/python tools/bench.py --quick

@@ -10,6 +10,7 @@ from davis_io import SeecapError
 __all__ = [
     "CheckpointError",
     "ConfigError",
+    "OptionError",
     "SeeNerfError",
     "TrainingDataError",
     "TrainingStopped",
@@ -24,7 +25,11 @@ class SeeNerfError(SeecapError):
 
 
 class ConfigError(SeeNerfError):
-    """A preset, variant or configuration value is unknown or out of range (a usage error)."""
+    """A configuration cannot be used here (no CUDA, no truth for the oracle, no Ray)."""
+
+
+class OptionError(ConfigError):
+    """An option's value is unknown or out of range: a usage error (exit status 2)."""
 
     exit_status = 2
 
@@ -55,8 +60,8 @@ def by_name(table: Mapping[str, T], what: str, name: str) -> T:
     """The entry of ``table`` called ``name`` (a preset, a variant).
 
     Raises:
-        ConfigError: unknown name (the message lists the known ones).
+        OptionError: unknown name (the message lists the known ones).
     """
     if name not in table:
-        raise ConfigError(f"unknown {what} {name!r}; choose one of: {', '.join(table)}")
+        raise OptionError(f"unknown {what} {name!r}; choose one of: {', '.join(table)}")
     return table[name]

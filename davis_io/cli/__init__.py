@@ -13,6 +13,7 @@ import signal
 import sys
 import threading
 import warnings
+from pathlib import Path
 
 from davis_io import SeecapError, __version__
 from davis_io.errors import UsageError, describe_error
@@ -84,6 +85,14 @@ def _failure(error: BaseException, verb: str, debug: bool) -> int:
     return EXIT_USAGE if isinstance(error, UsageError) else EXIT_ERROR
 
 
+def _check_paths(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """A usage error for a path no file system can hold (a NUL byte), before any verb runs."""
+    for name, value in vars(args).items():
+        for path in value if isinstance(value, list) else [value]:
+            if isinstance(path, Path) and "\x00" in str(path):
+                parser.error(f"argument {name}: {str(path)!r} holds a NUL byte, which no path may")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``seecap``; return the exit code (0 ok, 1 failure, 2 usage, 130 Ctrl-C, 143 SIGTERM).
 
@@ -97,6 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.verb is None:
         parser.print_help()
         return EXIT_USAGE
+    _check_paths(parser, args)
     shown = warnings.showwarning
     if not args.debug:
         warnings.showwarning = _show_warning

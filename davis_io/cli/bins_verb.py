@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from davis_io.session.defaults import BINS
+
 __all__ = ["HELP", "add_arguments", "run"]
 
 HELP = "compute a session's exposure-synchronised event bins for another number of bins"
@@ -13,7 +15,9 @@ HELP = "compute a session's exposure-synchronised event bins for another number 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the options of ``seecap bins``."""
     parser.add_argument("session", type=Path, help="session folder")
-    parser.add_argument("--bins", type=int, required=True, help="event bins per exposure")
+    parser.add_argument(
+        "--bins", type=BINS.argument("--bins"), required=True, help="event bins per exposure"
+    )
     parser.add_argument("--force", action="store_true", help="recompute bins already stored")
 
 

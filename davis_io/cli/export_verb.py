@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from davis_io.session import DEFAULT_BINS
+from davis_io.session.defaults import BINS, DEFAULT_BINS
 
 __all__ = ["HELP", "add_arguments", "run"]
 
@@ -31,7 +31,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "model, OpenGL axes, pixel centres at +0.5) that nerfstudio and instant-ngp read",
     )
     parser.add_argument(
-        "--bins", type=int, default=DEFAULT_BINS, help="with --nerfstudio: the poses' b"
+        "--bins",
+        type=BINS.argument("--bins"),
+        default=DEFAULT_BINS,
+        help="with --nerfstudio: the poses' b",
     )
 
 

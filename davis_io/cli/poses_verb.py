@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from davis_io.session.defaults import DEFAULT_BINS
+from davis_io.session.defaults import BINS, DEFAULT_BINS, THRESHOLD
 
 __all__ = ["HELP", "add_arguments", "run"]
 
@@ -17,7 +17,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the options of ``seecap poses``."""
     parser.add_argument("session", type=Path, help="session folder")
     parser.add_argument(
-        "--bins", type=int, default=DEFAULT_BINS, help="event bins per exposure (b)"
+        "--bins",
+        type=BINS.argument("--bins"),
+        default=DEFAULT_BINS,
+        help="event bins per exposure (b)",
     )
     parser.add_argument(
         "--intrinsics",
@@ -26,7 +29,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "or a text file with those four numbers",
     )
     parser.add_argument(
-        "--threshold", type=float, help="DVS contrast threshold (log units per event)"
+        "--threshold",
+        type=THRESHOLD.argument("--threshold"),
+        help="DVS contrast threshold (log units per event)",
     )
     parser.add_argument("--force", action="store_true", help="estimate again even if stored")
 

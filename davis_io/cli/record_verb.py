@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 from davis_io.errors import UsageError
-from davis_io.session.defaults import DEFAULT_BINS
+from davis_io.session.bounds import Bounds
+from davis_io.session.defaults import BINS, DEFAULT_BINS, EXPOSURE_S, FRAME_COUNT, SEED
 from davis_io.session.units import parse_duration_us
 from davis_io.types import ColorFilter
 
@@ -21,11 +22,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--exposure", help="APS exposure: seconds (0.15), 150ms or 150000us")
     parser.add_argument("--out", type=Path, help="session folder (default: session-<UTC time>)")
     limit = parser.add_mutually_exclusive_group()
-    limit.add_argument("--frames", type=int, help="stop after this many frames")
+    limit.add_argument(
+        "--frames", type=FRAME_COUNT.argument("--frames"), help="stop after this many frames"
+    )
     limit.add_argument("--duration", help="stop after this much time: seconds, ms or us")
     parser.add_argument(
         "--bins",
-        type=int,
+        type=BINS.argument("--bins"),
         default=DEFAULT_BINS,
         help=f"event bins per exposure (default {DEFAULT_BINS})",
     )
@@ -46,7 +49,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "values go only into the session's truth/)",
     )
     parser.add_argument(
-        "--seed", type=int, default=0, help="with --emulate: seed of the shake, noise and sensor"
+        "--seed",
+        type=SEED.argument("--seed"),
+        default=0,
+        help="with --emulate: seed of the shake, noise and sensor",
     )
     parser.add_argument(
         "--color-filter",
@@ -70,8 +76,8 @@ def run(args: argparse.Namespace) -> int:
     if args.replay is None and args.color_filter is not None:
         raise UsageError("--color-filter describes a replayed file's sensor: use it with --replay")
     request = CaptureRequest(
-        exposure_us=_duration(args.exposure, "--exposure"),
-        frame_interval_us=_duration(args.frame_interval, "--frame-interval"),
+        exposure_us=_duration(args.exposure, "--exposure", EXPOSURE_S),
+        frame_interval_us=_duration(args.frame_interval, "--frame-interval", FRAME_INTERVAL_S),
         frames=args.frames,
         serial=args.serial,
         replay=args.replay,
@@ -107,8 +113,18 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _duration(text: str | None, what: str) -> int | None:
-    return None if text is None else parse_duration_us(text, what=what)
+FRAME_INTERVAL_S = Bounds(1e-6, 60.0, "s")
+"""Time between frame starts: a frame a minute at the longest."""
+
+
+def _duration(text: str | None, what: str, bounds: Bounds | None = None) -> int | None:
+    """``text`` in µs (None stays None), within ``bounds`` (in seconds) when given."""
+    if text is None:
+        return None
+    value_us = parse_duration_us(text, what=what)
+    if bounds is not None:
+        bounds.check(what, value_us / 1e6)
+    return value_us
 
 
 class _StatusPrinter:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -15,6 +16,10 @@ from davis_io.errors import UsageError
 from davis_io.types import ColorFilter
 
 __all__ = ["EmulatorConfig"]
+
+_TRUTH_BYTES_PER_PIXEL = 3 * 4 * 8
+"""Memory per pixel of a view's truth and its renders while it is made: linear RGB (float32)
+and depth, the bracket of LDR images, the sub-frame renders of one exposure."""
 
 
 @dataclass(frozen=True)
@@ -118,6 +123,21 @@ class EmulatorConfig:
             )
         if problems:
             raise UsageError("emulator settings: " + "; ".join(problems))
+        self._check_memory()
+
+    def _check_memory(self) -> None:
+        """Refuse settings whose truth would not fit in half of this machine's memory."""
+        per_view = self.width * self.height * _TRUTH_BYTES_PER_PIXEL
+        needed = (self.frames + self.test_views) * per_view
+        available = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2
+        if needed > available:
+            raise UsageError(
+                f"emulating {self.frames} frames and {self.test_views} test views of "
+                f"{self.width}x{self.height} keeps their truth in memory: about "
+                f"{needed / 2**30:.1f} GiB, more than half of this machine's "
+                f"{2 * available / 2**30:.0f} GiB; emulate at most "
+                f"{max(available // per_view - self.test_views, 1)} frames here"
+            )
 
     @property
     def camera(self) -> PinholeCamera:

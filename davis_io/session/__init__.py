@@ -6,6 +6,7 @@ weights, the bins' sub-division and trapezoid weights, the shared defaults and d
 
 from davis_io.bins import subdivide, trapezoid_weights
 from davis_io.colorfilter import filter_weights
+from davis_io.session.bounds import Bounds
 from davis_io.session.calibration import SensorCalibration, default_calibration
 from davis_io.session.defaults import DEFAULT_BINS, DEFAULT_THRESHOLD
 from davis_io.session.lock import SessionBusy, writer_lock
@@ -18,6 +19,7 @@ from davis_io.session.writer import not_written, output_errors
 from davis_io.types import ColorFilter
 
 __all__ = [
+    "Bounds",
     "DEFAULT_BINS",
     "DEFAULT_THRESHOLD",
     "TRUTH_DIR",

@@ -5,8 +5,8 @@ is wrong: far in the future, or behind the events before it. Refusing the whole 
 it loses everything; keeping it breaks the one increasing clock a session needs. The events
 kept are the longest run of the stream in time order (the longest non-decreasing subsequence
 of its times), so an isolated glitch costs its own event only: one far ahead is dropped rather
-than every event after it. The last few events of each packet are held until the next packet
-shows whether they were glitches.
+than every event after it. When the last few events of a packet jump far ahead of the rest,
+they are held until the next packet shows whether they were a glitch or the stream moved on.
 """
 
 from __future__ import annotations
@@ -20,8 +20,14 @@ from davis_io.types import EVENT_DTYPE, empty_events
 __all__ = ["EventOrder", "longest_ordered"]
 
 HELD_EVENTS = 64
-"""Events at the end of a packet kept back until the next packet: a glitch there can only be
-told from the events that follow it."""
+"""How far from a packet's end a jump ahead makes the events after it wait for the next packet:
+a glitch there can only be told from the events that follow it."""
+
+JUMP_US = 1_000
+"""A step between two events counts as a jump ahead when longer than this and than
+:data:`JUMP_FACTOR` times the packet's median step."""
+
+JUMP_FACTOR = 100
 
 
 def longest_ordered(times: np.ndarray, floor: int) -> np.ndarray:
@@ -74,21 +80,24 @@ class EventOrder:
         self.first_dropped_t_us: int | None = None
 
     def accept(self, events: np.ndarray) -> np.ndarray:
-        """The events of this packet (and of the held ones) that are now known to be in order."""
+        """The events of this packet (and of those held) that are known to be in time order."""
         if len(events) == 0:
             return events
         joined = np.concatenate([self._held, events]) if len(self._held) else events
         kept = self._keep(joined)
-        self._held = kept[-HELD_EVENTS:]
-        released = kept[:-HELD_EVENTS] if len(kept) > HELD_EVENTS else kept[:0]
-        if len(released):
-            self._floor = int(released["t"][-1])
-        return released
+        held_from = _jump_near_end(kept["t"])
+        self._held = kept[held_from:]
+        return self._release(kept[:held_from])
 
     def finish(self) -> np.ndarray:
-        """The events still held at the end of the stream."""
+        """The events still held (at the end of the stream, or before a known loss)."""
         released, self._held = self._held, empty_events()
-        return released
+        return self._release(released)
+
+    def _release(self, events: np.ndarray) -> np.ndarray:
+        if len(events):
+            self._floor = int(events["t"][-1])
+        return events
 
     def note(self) -> str | None:
         """One line on what was dropped, for the session's source notes (None: nothing was)."""
@@ -108,3 +117,16 @@ class EventOrder:
             self.first_dropped_t_us = int(dropped["t"][0])
         self.dropped += len(dropped)
         return np.ascontiguousarray(events[keep]).astype(EVENT_DTYPE, copy=False)
+
+
+def _jump_near_end(times: np.ndarray) -> int:
+    """Index of the first event after a jump ahead among the last :data:`HELD_EVENTS` (or len)."""
+    if len(times) < 2:
+        return len(times)
+    steps = np.diff(times)
+    tail = steps[-HELD_EVENTS:]
+    limit = max(JUMP_US, JUMP_FACTOR * float(np.median(steps)))
+    jumps = np.flatnonzero(tail > limit)
+    if len(jumps) == 0:
+        return len(times)
+    return len(steps) - len(tail) + int(jumps[0]) + 1

@@ -80,10 +80,12 @@ def new_session_folder(out_dir: Path, *, overwrite: bool) -> Iterator[Path]:
     if folder.is_dir() and folder.stat().st_uid != os.geteuid():
         raise UsageError(f"{folder} belongs to another user: choose another --out")
     created = not folder.exists()
+    if not created and _holds_files(folder):
+        _check_replaceable(folder, overwrite)  # refused before a lock file is left there
     started = False
     try:
         with writer_lock(folder, "recording"):
-            if any(child.name != LOCK_NAME for child in folder.iterdir()):
+            if _holds_files(folder):
                 _check_replaceable(folder, overwrite)
                 empty_folder(folder)
             started = True
@@ -97,6 +99,10 @@ def new_session_folder(out_dir: Path, *, overwrite: bool) -> Iterator[Path]:
         if created and started and not (folder / MANIFEST_NAME).exists():
             shutil.rmtree(folder, ignore_errors=True)
         raise
+
+
+def _holds_files(folder: Path) -> bool:
+    return any(child.name != LOCK_NAME for child in folder.iterdir())
 
 
 def _check_replaceable(folder: Path, overwrite: bool) -> None:

@@ -11,6 +11,8 @@ from pathlib import Path
 
 from davis_io import __version__
 from davis_io.errors import SessionError
+from davis_io.session.bounds import Bounds
+from davis_io.session.defaults import BINS
 from davis_io.types import ColorFilter, SourceInfo
 
 __all__ = [
@@ -181,10 +183,41 @@ class SessionManifest:
         manifest = cls(**values)
         if manifest.status not in _STATUSES:
             raise SessionError(f"{where}: status {manifest.status!r} is not one of {_STATUSES}")
-        for name in ("width", "height", "b"):
-            if getattr(manifest, name) < 1:
-                raise SessionError(f"{where}: field {name!r} must be >= 1, not {values[name]}")
+        _check_values(manifest, where)
         return manifest
+
+
+_SIZE = Bounds(1, 8192, "pixels", integer=True)
+_COUNT = Bounds(0, 2**62, integer=True)
+_DURATION_US = Bounds(0, 30 * 86_400 * 1_000_000, "µs", integer=True)
+_VALUE_BOUNDS = {
+    "width": _SIZE,
+    "height": _SIZE,
+    "b": BINS,
+    "frame_count": _COUNT,
+    "event_count": _COUNT,
+    "exposure_requested_us": _DURATION_US,
+    "exposure_measured_us": _DURATION_US,
+}
+"""The values each numeric field of ``session.json`` may hold (None aside, where allowed)."""
+
+
+def _check_values(manifest: SessionManifest, where: str) -> None:
+    """Raise on the first field outside its range, or a colour filter seecap does not know."""
+    for name, bounds in _VALUE_BOUNDS.items():
+        value = getattr(manifest, name)
+        problem = None if value is None else bounds.problem(f"field {name!r}", value)
+        if problem is not None:
+            raise SessionError(f"{where}: {problem}")
+    for name, value in dataclasses.asdict(manifest.drops).items():
+        problem = _COUNT.problem(f"field 'drops.{name}'", value)
+        if problem is not None:
+            raise SessionError(f"{where}: {problem}")
+    if manifest.color_filter not in {pattern.value for pattern in ColorFilter}:
+        names = ", ".join(pattern.value for pattern in ColorFilter)
+        raise SessionError(
+            f"{where}: field 'color_filter' {manifest.color_filter!r} is not one of {names}"
+        )
 
 
 _REQUIRED = ("camera", "serial", "width", "height", "color_filter", "source", "b")

@@ -206,6 +206,7 @@ class _WriterState:
     def consume(self, packet: Packet, queue_loss: int) -> bool:
         """Store one packet; return True once a frame or duration limit is reached."""
         if packet.dropped_events or queue_loss:
+            self._add_events(self.order.finish())  # the loss comes after the events held
             self.sync.note_loss()
             self.progress.drops.source_events += packet.dropped_events
         self._note_source(packet)

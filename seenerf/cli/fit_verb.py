@@ -9,7 +9,7 @@ from pathlib import Path
 from davis_io.session import seconds_argument
 from seenerf.cli.options import add_dataclass_options, dataclass_values
 from seenerf.cli.progress import TrainingBar
-from seenerf.model.config import FitConfig
+from seenerf.model.config import FIELD_BOUNDS, FitConfig
 
 __all__ = ["FLAGS", "HELP", "add_arguments", "run"]
 
@@ -50,7 +50,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quiet", action="store_true", help="no progress bar or lines: the result only"
     )
-    add_dataclass_options(parser, FitConfig, seconds=seconds_argument("--time-budget"), flags=FLAGS)
+    add_dataclass_options(
+        parser,
+        FitConfig,
+        seconds=seconds_argument("--time-budget", FIELD_BOUNDS["time_budget_s"]),
+        flags=FLAGS,
+        bounds=FIELD_BOUNDS,
+    )
 
 
 def run(args: argparse.Namespace) -> int:

@@ -15,6 +15,8 @@ import re
 import typing
 from collections.abc import Callable
 
+from davis_io.session import Bounds
+
 __all__ = ["add_dataclass_options", "attribute_docs", "dataclass_values", "plain_text"]
 
 _ENTRY = re.compile(r"^(\w+)(?: \([^)]*\))?:\s*(.*)$")
@@ -66,7 +68,9 @@ def _default(field: dataclasses.Field):
     return field.default
 
 
-def _option(field: dataclasses.Field, kind, seconds: Callable[[str], float]) -> tuple[str, dict]:
+def _option(
+    field: dataclasses.Field, kind, seconds: Callable[[str], float], bounds: Bounds | None
+) -> tuple[str, dict]:
     """The option string and ``add_argument`` keywords of one field (help added by the caller)."""
     in_seconds = field.name.endswith("_s")
     flag = "--" + field.name.removesuffix("_s").replace("_", "-")
@@ -78,6 +82,8 @@ def _option(field: dataclasses.Field, kind, seconds: Callable[[str], float]) -> 
         keywords = {"type": typing.get_args(kind)[0], "nargs": "+"}
     elif kind is float and in_seconds:
         keywords = {"type": seconds, "metavar": "DURATION"}
+    elif bounds is not None:
+        keywords = {"type": bounds.argument(flag), "metavar": flag[2:].upper().replace("-", "_")}
     else:
         keywords = {"type": kind}
     if in_seconds:
@@ -90,6 +96,7 @@ def add_dataclass_options(
     cls: type,
     seconds: Callable[[str], float],
     flags: dict[str, str] | None = None,
+    bounds: dict[str, Bounds] | None = None,
 ) -> None:
     """Add one option per field of the dataclass ``cls``, its default the field's.
 
@@ -98,11 +105,12 @@ def add_dataclass_options(
         cls: a dataclass whose docstring documents its fields under ``Attributes:``.
         seconds: parses a duration given on the command line into seconds.
         flags: option strings to use instead of the derived ones, by field name.
+        bounds: the range of each numeric field, checked as the option is parsed.
     """
     docs = attribute_docs(cls.__doc__)
     hints = typing.get_type_hints(cls)
     for field in dataclasses.fields(cls):
-        flag, keywords = _option(field, hints[field.name], seconds)
+        flag, keywords = _option(field, hints[field.name], seconds, (bounds or {}).get(field.name))
         default = _default(field)
         text = plain_text(docs.get(field.name, "")).replace("%", "%%").rstrip(".")
         if keywords.get("action") == "store_false":

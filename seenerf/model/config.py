@@ -7,14 +7,45 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from davis_io.session import output_errors
-from seenerf.errors import ConfigError
+from davis_io.session import Bounds, output_errors
+from davis_io.session.defaults import SEED, THRESHOLD
+from seenerf.errors import ConfigError, OptionError
 from seenerf.model.presets import DEFAULT_PRESET, PRESETS
 
-__all__ = ["DEFAULT_VARIANT", "FitConfig", "load_config", "save_config"]
+__all__ = ["DEFAULT_VARIANT", "FIELD_BOUNDS", "FitConfig", "load_config", "save_config"]
 
 DEFAULT_VARIANT = "full"
 """The paper's method: what a fit runs unless told otherwise and what benchmarks measure."""
+
+_WEIGHT = Bounds(0.0, 1e3)
+FIELD_BOUNDS: dict[str, Bounds] = {
+    "steps": Bounds(0, 10_000_000, "steps", integer=True),
+    "time_budget_s": Bounds(0.0, 30 * 86_400.0, "s"),
+    "seed": SEED,
+    "bins": Bounds(0, 64, "bins", integer=True),
+    "event_weight": _WEIGHT,
+    "anchor_weight": _WEIGHT,
+    "anchor_log_exposure": Bounds(-50.0, 50.0, "ln(radiance x s)"),
+    "anchor_value": Bounds(0.0, 1.0, low_open=True, high_open=True),
+    "threshold": Bounds(0.0, THRESHOLD.high, THRESHOLD.unit),
+    "cutoff_hz": Bounds(0.0, 1e6, "Hz", low_open=True),
+    "event_share": Bounds(0.0, 1.0),
+    "validation_share": Bounds(0.0, 0.5, high_open=True),
+    "threads": Bounds(0, 1024, "threads", integer=True),
+    "batch_pixels": Bounds(0, 1_000_000, "pixels", integer=True),
+    "warm_steps": Bounds(-1, 1_000_000, "steps", integer=True),
+    "subframes": Bounds(1, 64, "poses per bin", integer=True),
+}
+"""The values each numeric field of :class:`FitConfig` takes (0 and -1 mean the preset's where
+the field says so), checked for options and for a ``config.json`` read back alike."""
+
+_EXPOSURE = Bounds(1e-6, 30 * 86_400.0, "s")
+"""An exposure of the rendered brackets."""
+
+_CHOICES: dict[str, tuple[str, ...]] = {
+    "response": ("auto", "learned"),
+    "device": ("auto", "cpu", "cuda"),
+}
 
 
 @dataclass
@@ -109,27 +140,22 @@ class FitConfig:
             ("preset", PRESETS),
             ("variant", VARIANTS),
             ("low_pass", LOW_PASS_READINGS),
+            *_CHOICES.items(),
         ):
             if getattr(self, name) not in table:
-                raise ConfigError(
+                raise OptionError(
                     f"{name} {getattr(self, name)!r} is unknown; choose one of: {', '.join(table)}"
                 )
-        if self.response not in ("auto", "learned"):
-            raise ConfigError(f"response {self.response!r} is unknown; choose auto or learned")
-        if self.device not in ("auto", "cpu", "cuda"):
-            raise ConfigError(f"device {self.device!r} is unknown; choose auto, cpu or cuda")
-        if self.steps < 0 or self.time_budget_s < 0 or self.bins < 0:
-            raise ConfigError("steps, time budget and bins must be >= 0")
-        if self.subframes < 1:
-            raise ConfigError(
-                f"subframes must be >= 1 (1: the b+1 latent poses), got {self.subframes}"
-            )
-        if not 0 <= self.event_share <= 1 or not 0 <= self.validation_share < 0.5:
-            raise ConfigError("event_share must be in [0, 1] and validation_share in [0, 0.5)")
-        if self.event_weight < 0:
-            raise ConfigError(f"event_weight {self.event_weight} is negative (0: the preset's)")
-        if self.threshold < 0 or self.cutoff_hz <= 0:
-            raise ConfigError("threshold must be >= 0 (0: measured) and cutoff_hz > 0")
+        problems = [
+            bounds.problem(option_name(name), getattr(self, name))
+            for name, bounds in FIELD_BOUNDS.items()
+        ] + [_EXPOSURE.problem("--exposures", exposure) for exposure in self.exposures_s]
+        for problem in problems:
+            if problem is not None:
+                raise OptionError(problem)
+        for name in ("dead_time", "frame_noise", "register_test_views"):
+            if not isinstance(getattr(self, name), bool):
+                raise OptionError(f"{name} {getattr(self, name)!r} must be true or false")
         return self
 
     def training_key(self) -> dict:
@@ -156,6 +182,11 @@ class FitConfig:
         return {name: getattr(self, name) for name in keep}
 
 
+def option_name(field_name: str) -> str:
+    """The command-line option of a field: ``time_budget_s`` -> ``--time-budget``."""
+    return "--" + field_name.removesuffix("_s").replace("_", "-")
+
+
 def save_config(config: FitConfig, path: Path, extra: dict | None = None) -> None:
     """Write the config (and resolved extras such as the field size) as JSON."""
     payload = {"config": dataclasses.asdict(config), **(extra or {})}
@@ -173,6 +204,8 @@ def load_config(path: Path) -> FitConfig:
         values = json.loads(Path(path).read_text())["config"]
         values["exposures_s"] = tuple(values.get("exposures_s", ()))
         return FitConfig(**values).validate()
+    except OptionError as error:
+        raise OptionError(f"{path}: {error}") from None
     except (OSError, KeyError, TypeError, json.JSONDecodeError) as error:
         raise ConfigError(
             f"{path}: not a readable fit config ({error}); re-run seecap fit"

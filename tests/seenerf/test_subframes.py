@@ -92,7 +92,9 @@ def test_median_travel_is_measured_at_the_harmonic_mean_depth():
 
 
 def test_subframes_below_one_are_refused():
-    with pytest.raises(ConfigError, match="subframes must be >= 1"):
+    with pytest.raises(
+        ConfigError, match="--subframes 0 is out of range: give a whole number from 1"
+    ):
         FitConfig(subframes=0).validate()
 
 

@@ -59,7 +59,7 @@ def test_the_event_weight_is_the_presets_unless_one_is_stated(preset, stated, us
     config = _config(preset=preset, event_weight=stated)
     trainer = Trainer(tiny_scene, config, log=lambda line: None)
     assert trainer.weights.events == used
-    with pytest.raises(ConfigError, match="event_weight -0.1 is negative"):
+    with pytest.raises(ConfigError, match="--event-weight -0.1 is out of range"):
         FitConfig(event_weight=-0.1).validate()
 
 

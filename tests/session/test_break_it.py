@@ -256,7 +256,7 @@ def test_longest_ordered_by_hand():
 
 
 def test_a_glitch_at_a_packets_end_is_judged_by_the_next_packet():
-    from davis_io.session.event_order import HELD_EVENTS, EventOrder
+    from davis_io.session.event_order import EventOrder
     from davis_io.types import EVENT_DTYPE
 
     def events(times):
@@ -268,9 +268,14 @@ def test_a_glitch_at_a_packets_end_is_judged_by_the_next_packet():
     first = order.accept(events([*range(100, 300), 10**9]))  # the last one jumps ahead
     second = order.accept(events(range(300, 500)))
     kept = np.concatenate([first, second, order.finish()])["t"]
-    assert len(first) == 201 - HELD_EVENTS
+    assert first["t"].tolist() == list(range(100, 300))  # only the jump waited
     assert kept.tolist() == list(range(100, 500)) and order.dropped == 1
     assert "dropped 1 events" in order.note()
+    # A stream that really moved on: the events after the jump are kept once confirmed.
+    order = EventOrder()
+    first = order.accept(events([*range(100, 300), 5_000_000]))
+    second = order.accept(events(range(5_000_001, 5_000_200)))
+    assert len(first) == 200 and len(second) == 200 and order.dropped == 0
 
 
 def _aedat2_with_flipped_time_bytes(path, count, share, seed=1):

@@ -212,17 +212,19 @@ def test_preview_must_be_a_png_in_an_existing_folder(tmp_path):
         record(ListSource([]), tmp_path / "s", preview=tmp_path / "nowhere" / "p.png")
 
 
-def test_time_going_back_stops_with_a_clear_error(tmp_path):
+def test_events_whose_time_goes_back_are_dropped_and_noted(tmp_path):
     packets = synthetic_packets(3)
     backwards = packets[2].events.copy()
     backwards["t"] -= 50_000
     packets.insert(3, Packet(events=backwards))
-    with pytest.raises(RecordingError, match="event times go back"):
-        record(ListSource(packets), tmp_path / "s")
+    result = record(ListSource(packets), tmp_path / "s")
+    assert result.status == "complete"
     with Session.open(tmp_path / "s") as session:
-        assert session.manifest.status == "interrupted"
         times = session.events_between(-(2**62), 2**62)["t"]
         assert np.all(np.diff(times) >= 0)
+        # The 400 events moved 50 ms back are dropped, every other one kept.
+        assert session.event_count == 3 * 400 + 10
+        assert "dropped 400 events" in session.manifest.source_notes[-1]
 
 
 def test_ctrl_c_is_a_stop_request_while_the_threads_run(tmp_path):
