@@ -14,11 +14,12 @@ import sys
 import threading
 import warnings
 from pathlib import Path
+from typing import NoReturn
 
 from davis_io import SeecapError, __version__
 from davis_io.errors import UsageError, describe_error
 
-__all__ = ["VERBS", "main"]
+__all__ = ["VERBS", "console", "end_process", "main"]
 
 VERBS: dict[str, str] = {
     # verb: module that implements it
@@ -133,5 +134,25 @@ def main(argv: list[str] | None = None) -> int:
             signal.signal(signal.SIGTERM, terminate)
 
 
+def end_process(status: int) -> NoReturn:
+    """Exit with ``status``; past HDF5's clean-up when it holds a file it could not close.
+
+    A file HDF5 failed to close (a full disk) crashes the library's exit handlers; the process
+    then ends at once, its output flushed, its recorded data readable after a repair.
+    """
+    from davis_io.session.writer import abandoned_files
+
+    if abandoned_files():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    sys.exit(status)
+
+
+def console() -> NoReturn:
+    """The ``seecap`` console script: :func:`main`, then :func:`end_process`."""
+    end_process(main())
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    console()

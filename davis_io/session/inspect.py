@@ -24,6 +24,7 @@ from davis_io.session.manifest import (
     write_manifest,
 )
 from davis_io.session.store import Session
+from davis_io.session.writer import RESERVE_NAME
 
 __all__ = [
     "RepairReport",
@@ -203,6 +204,7 @@ def repair_session(path: Path | str) -> RepairReport:
 
 
 def _repair(folder: Path) -> RepairReport:
+    (folder / RESERVE_NAME).unlink(missing_ok=True)  # a killed recorder's room to close in
     manifest = read_manifest(folder)
     status_before = manifest.status
     with Session.open(folder) as session:

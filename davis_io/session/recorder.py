@@ -284,10 +284,25 @@ class _Run:
         try:
             write_manifest(self.folder, manifest)
         except OSError as error:
-            message = message or f"cannot write {self.folder / MANIFEST_NAME}: {error}"
+            message = (
+                f"{message or 'the recording could not be closed'}. {self.folder / MANIFEST_NAME} "
+                f"could not be updated ({error.strerror or error}): its "
+                f"{self.writer.frames_written} frames and {self.writer.events_written} events are "
+                f"readable; free some space, then `seecap inspect {self.folder} --repair` marks "
+                "the session interrupted"
+            )
+        else:
+            message = message and f"{message}. {self._kept()}"
         if message:
             raise RecordingError(message, result)
         return result
+
+    def _kept(self) -> str:
+        return (
+            f"The session {self.folder} was closed and marked interrupted; its "
+            f"{self.writer.frames_written} frames and {self.writer.events_written} events are "
+            "readable."
+        )
 
     def _stop_reason(self) -> str:
         """Why a recording that did not fail is incomplete ("" when it is not)."""
@@ -304,22 +319,17 @@ class _Run:
 
     def _error_message(self, storage_error: OSError | None) -> str:
         """One sentence on what stopped the recording ("" when nothing failed)."""
-        kept = (
-            f"The session {self.folder} was closed and marked interrupted; its "
-            f"{self.writer.frames_written} frames and {self.writer.events_written} events are "
-            "readable."
-        )
         outcome = self.outcome
         if storage_error is not None:
-            return f"{_describe_storage_error(storage_error, self.folder)}. {kept}"
+            return _describe_storage_error(storage_error, self.folder)
         if outcome.write_error is not None:
-            return f"could not store the data: {describe_error(outcome.write_error)}. {kept}"
+            return f"could not store the data: {describe_error(outcome.write_error)}"
         if outcome.source_error is not None:
             error = outcome.source_error
-            return f"the source failed: {type(error).__name__}: {error}. {kept}"
+            return f"the source failed: {type(error).__name__}: {error}"
         if self.failure is not None:
             error = self.failure
-            return f"the status display failed: {type(error).__name__}: {error}. {kept}"
+            return f"the status display failed: {type(error).__name__}: {error}"
         return ""
 
 

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import errno
 import signal
 import threading
+import time
 from pathlib import Path
 
 import h5py
@@ -468,6 +470,30 @@ def _write_pose_datasets(group: h5py.Group, poses: SessionPoses) -> None:
         group["time_us"] = np.asarray(poses.time_us, np.int64)
 
 
+READER_WAIT_S = 120.0
+"""How long a writer waits for other processes reading ``session.h5`` to close it (HDF5 locks
+a file that any process has open), so that work already done is not lost to a reader."""
+
+
+def _open_for_writing(path: Path) -> h5py.File:
+    """``path`` opened ``r+``, waiting up to :data:`READER_WAIT_S` while a reader holds it."""
+    deadline = time.monotonic() + READER_WAIT_S
+    while True:
+        try:
+            return h5py.File(path, "r+")
+        except OSError as error:
+            locked = "unable to lock file" in str(error) or "errno = 11" in str(error)
+            if not locked or time.monotonic() > deadline:
+                if locked:
+                    raise OSError(
+                        errno.EAGAIN,
+                        f"another process has it open for {READER_WAIT_S:.0f} s (close "
+                        "`seecap inspect`, HDFView or a notebook reading it, then run this again)",
+                    ) from error
+                raise
+            time.sleep(0.5)
+
+
 def _exit_on_terminate(signum: int, frame) -> None:
     raise SystemExit(128 + signum)
 
@@ -491,7 +517,7 @@ class _WritableSession:
             self._previous_handler = signal.signal(signal.SIGTERM, _exit_on_terminate)
         self._session._h5.close()
         try:
-            self._session._h5 = h5py.File(self._session.h5_path, "r+")
+            self._session._h5 = _open_for_writing(self._session.h5_path)
         except OSError as error:
             self._session._h5 = h5py.File(self._session.h5_path, "r")
             self._restore_handler()

@@ -28,6 +28,8 @@ from davis_io.types import Frame
 
 __all__ = [
     "MIN_FREE_BYTES",
+    "RESERVE_NAME",
+    "abandoned_files",
     "SessionWriter",
     "check_free_space",
     "not_written",
@@ -46,6 +48,12 @@ MIN_FREE_BYTES = 16 << 20
 """A recording stops while this much is still free on its disk: room to store what is held,
 close ``session.h5`` and write ``session.json``. HDF5 itself cannot survive a full disk (its
 chunk writes then fail where nothing can catch them)."""
+
+RESERVE_NAME = ".space-reserve"
+"""A file of :data:`MIN_FREE_BYTES` allocated while a session is written and removed before it
+closes: another process may fill the disk between two checks of the free space, and an HDF5
+file closed on a full disk is left in a state that crashes the process when its objects are
+freed; the reserve gives the close its room back."""
 _ERRNO = re.compile(r"errno = (\d+)")
 
 
@@ -109,6 +117,36 @@ def check_free_space(folder: Path, what: str, files_bytes: int = 0) -> None:
         )
 
 
+_ABANDONED: list[SessionWriter] = []
+"""Writers whose file HDF5 failed to close (a disk another process filled at that moment).
+
+HDF5 keeps such a file open with writes it cannot do; freeing its objects, or the library's own
+clean-up at exit, then crashes the process. They are kept here until the process ends without
+that clean-up (:func:`davis_io.cli.console`); what was flushed before stays readable and
+``seecap inspect SESSION --repair`` closes the session."""
+
+
+def abandoned_files() -> list[Path]:
+    """The files of this process that HDF5 could not close (see :data:`_ABANDONED`)."""
+    return [writer.path for writer in _ABANDONED]
+
+
+def _allocate(path: Path, size: int) -> None:
+    """Create ``path`` holding ``size`` bytes of real disk space (not a sparse file)."""
+    descriptor = os.open(path, os.O_CREAT | os.O_WRONLY | os.O_TRUNC | os.O_NOFOLLOW, 0o600)
+    try:
+        try:
+            os.posix_fallocate(descriptor, 0, size)
+        except OSError as error:
+            if error.errno not in (errno.EOPNOTSUPP, errno.EINVAL):
+                raise
+            block = bytes(1 << 20)  # a file system without fallocate: write the zeros
+            for _ in range(-(-size // len(block))):
+                os.write(descriptor, block)
+    finally:
+        os.close(descriptor)
+
+
 class SessionWriter:
     """Append events, IMU samples, triggers and binned frames to a new ``session.h5``.
 
@@ -126,10 +164,13 @@ class SessionWriter:
         self._held: dict[str, list[np.ndarray]] = {kind: [] for kind in _KINDS}
         self._held_events = 0
         self._closing = False
+        self._reserve = self.path.parent / RESERVE_NAME
         try:
             check_free_space(self.path.parent, "a recording")
+            _allocate(self._reserve, MIN_FREE_BYTES)
             self._h5 = h5py.File(self.path, "w", libver="latest", rdcc_nbytes=_CHUNK_CACHE_BYTES)
         except OSError as error:
+            self._reserve.unlink(missing_ok=True)
             raise SessionError(f"cannot create {self.path}: {error}") from error
         with storage_errors(self.path):
             create_layout(self._h5, width=width, height=height, b=b)
@@ -209,16 +250,22 @@ class SessionWriter:
         held is written even below the free-space margin: the margin is there for it.
         """
         self._closing = True
+        self._reserve.unlink(missing_ok=True)  # the room to close in, whatever filled the disk
         if not self._h5.id.valid:
             return
-        with storage_errors(self.path):
-            try:
-                self.flush()
-                if "image" not in self._columns["frames"]:
-                    self._add_image_dataset(_DEFAULT_IMAGE_DTYPE, _DEFAULT_BIT_DEPTH)
-            finally:
-                if self._h5.id.valid:
-                    self._h5.close()
+        try:
+            with storage_errors(self.path):
+                try:
+                    self.flush()
+                    if "image" not in self._columns["frames"]:
+                        self._add_image_dataset(_DEFAULT_IMAGE_DTYPE, _DEFAULT_BIT_DEPTH)
+                finally:
+                    if self._h5.id.valid:
+                        self._h5.close()
+        except OSError:
+            if self._h5.id.valid:  # HDF5 could not close it: never let it touch the file again
+                _ABANDONED.append(self)
+            raise
 
     def _spill(self, kind: str) -> None:
         """Append the held records of one kind to their datasets."""

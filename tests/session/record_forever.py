@@ -4,7 +4,8 @@ import sys
 
 from session_fakes import ListSource, endless_packets
 
-from davis_io.session.recorder import record
+from davis_io.cli import end_process
+from davis_io.session.recorder import RecordingError, record
 
 
 def report(status):
@@ -13,4 +14,9 @@ def report(status):
 
 if __name__ == "__main__":
     frames = "--no-frames" not in sys.argv[2:]
-    record(ListSource(endless_packets(frames)), sys.argv[1], status_callback=report)
+    try:
+        record(ListSource(endless_packets(frames)), sys.argv[1], status_callback=report)
+    except RecordingError as error:
+        print(f"seecap: error: record: {error}", file=sys.stderr)
+        end_process(1)
+    end_process(0)

@@ -309,3 +309,27 @@ def test_one_percent_of_corrupted_times_keeps_98_percent_of_the_events(tmp_path)
         assert session.event_count >= 98_000 and np.all(np.diff(times) >= 0)
         assert 0 < 100_000 - session.event_count <= 1_000
         assert any("timestamp glitches" in note for note in session.manifest.source_notes)
+
+
+def test_a_writer_waits_for_a_reader_instead_of_losing_its_work(session):
+    from davis_io.session import default_calibration
+
+    reader = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import sys, time, h5py\n"
+            "f = h5py.File(sys.argv[1], 'r')\n"
+            "print('open', flush=True)\n"
+            "time.sleep(2)\n",
+            str(session / "session.h5"),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert reader.stdout.readline().strip() == "open"
+    with Session.open(session) as opened:
+        opened.write_calibration(default_calibration(0.25, "stated"))
+    reader.wait(timeout=60)
+    with Session.open(session) as opened:
+        assert opened.calibration().threshold_on == 0.25

@@ -1,6 +1,7 @@
 """A disk that fills while recording or adding bins: a readable session, one line, exit 1."""
 
 import itertools
+import os
 import shutil
 import subprocess
 import sys
@@ -14,6 +15,7 @@ import davis_io.session.writer as writer_module
 from davis_io.cli import main
 from davis_io.errors import SessionError
 from davis_io.session import Session
+from davis_io.session.inspect import repair_session
 from davis_io.session.recorder import RecordingError, record
 
 Usage = namedtuple("Usage", "total used free")
@@ -70,7 +72,7 @@ RECORD_FOREVER = Path(__file__).with_name("record_forever.py")
 def test_a_real_small_disk_through_the_recorder(tmp_path):
     mount = tmp_path / "small"
     mount.mkdir()
-    size_mb = writer_module.MIN_FREE_BYTES // 2**20 + 8
+    size_mb = 2 * writer_module.MIN_FREE_BYTES // 2**20 + 8  # the reserve, the margin, data
     mounted = subprocess.run(
         ["mount", "-t", "tmpfs", "-o", f"size={size_mb}m", "tmpfs", str(mount)],
         capture_output=True,
@@ -189,3 +191,52 @@ def test_poses_a_full_disk_cut_short_are_not_listed_as_stored(tmp_path, monkeypa
         session.write_poses(4, poses)
     with Session.open(folder) as session:
         assert session.poses(4) is None
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 48 MB tmpfs of its own (needs the right to mount: root in a container, as CI runs)."""
+    mount = tmp_path / "small-disk"
+    mount.mkdir()
+    made = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=48m", "tmpfs", str(mount)], capture_output=True
+    )
+    if made.returncode != 0:
+        pytest.skip(f"cannot mount a small file system here: {made.stderr.decode().strip()}")
+    try:
+        yield mount
+    finally:
+        subprocess.run(["umount", "-l", str(mount)], check=False)
+
+
+def test_a_disk_another_process_fills_ends_the_recording_in_one_line(small_disk):
+    session = small_disk / "s"
+    recorder = subprocess.Popen(
+        [sys.executable, str(Path(__file__).with_name("record_forever.py")), str(session)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    for line in recorder.stdout:
+        if int(line.split()[1]) >= 3:
+            break
+    # Another program takes every byte left, fails with ENOSPC and stops, as programs do.
+    filler = os.open(small_disk / "filler", os.O_CREAT | os.O_WRONLY, 0o600)
+    try:
+        for _ in itertools.count():
+            os.write(filler, bytes(1 << 16))
+    except OSError:
+        pass
+    finally:
+        os.close(filler)
+    _, err = recorder.communicate(timeout=120)
+    assert recorder.returncode == 1, err  # not killed by a signal (139 was a segfault)
+    assert "Segmentation" not in err and "is full" in err
+    (small_disk / "filler").unlink()
+    if "marked interrupted" not in err:  # the other program took the room to close in, too
+        assert "could not be updated" in err and "--repair" in err
+        repair_session(session)
+    with Session.open(session) as opened:
+        assert not opened.needs_repair and opened.manifest.status == "interrupted"
+        assert opened.frame_count >= 3
+    assert not (session / writer_module.RESERVE_NAME).exists()
