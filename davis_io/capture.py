@@ -52,6 +52,8 @@ class CaptureRequest:
         seed: the emulator's seed (shake, pixel mismatch, noise and a random sensor).
         color_filter: the replayed sensor's colour filter, for a file that does not state it
             (None: the file's).
+        event_window_us: the emulator keeps only the events this near an exposure, µs (0: all).
+        still_frames: the emulator holds the camera still for this many frames mid-recording.
     """
 
     exposure_us: int | None = None
@@ -63,6 +65,8 @@ class CaptureRequest:
     sensor: str = "default"
     seed: int = 0
     color_filter: ColorFilter | None = None
+    event_window_us: int = 0
+    still_frames: int = 0
 
     @property
     def kind(self) -> str:
@@ -97,7 +101,12 @@ def _open_replay(request: CaptureRequest) -> PacketSource:
 def _open_emulator(request: CaptureRequest) -> PacketSource:
     from davis_io.emulator import EmulatedCamera
 
-    settings = {"sensor": request.sensor, "seed": request.seed}
+    settings = {
+        "sensor": request.sensor,
+        "seed": request.seed,
+        "event_window_us": request.event_window_us,
+        "still_frames": request.still_frames,
+    }
     if request.exposure_us is not None:
         settings["exposure_us"] = request.exposure_us
         settings["frame_interval_us"] = request.interval_us()

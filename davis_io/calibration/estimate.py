@@ -7,12 +7,13 @@ shell (:func:`calibrate_session`) reads them, runs it and stores the result.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from davis_io.calibration.consistency import (
     KNOTS,
+    THRESHOLD_RANGE,
     ConsistencyProblem,
     fit_pixel_factors,
     fit_thresholds,
@@ -20,15 +21,27 @@ from davis_io.calibration.consistency import (
 from davis_io.calibration.dead_time import dead_time_us
 from davis_io.calibration.frame_noise import frame_noise
 from davis_io.calibration.pixel_events import event_path, pixel_events
+from davis_io.calibration.plausible import (
+    BLACK_LEVEL,
+    DEAD_TIME_US,
+    FACTOR_SPREAD,
+    LATENCY_US,
+    THRESHOLD,
+    Assumptions,
+    flat_profile,
+)
 from davis_io.calibration.response_fit import (
     FrameLevels,
+    InverseResponse,
     frame_levels,
     linear_fit,
     place_knots,
 )
-from davis_io.calibration.scale import common_scale
+from davis_io.calibration.scale import CommonScale, common_scale
 from davis_io.errors import UsageError
+from davis_io.gaps import overlapping
 from davis_io.session.calibration import SensorCalibration
+from davis_io.session.defaults import DEFAULT_THRESHOLD
 
 __all__ = ["CalibrationInput", "LATENCIES_US", "calibrate_frames"]
 
@@ -62,6 +75,8 @@ class CalibrationInput:
         adc_step: one ADC step, normalised (1 / 1023 for 10 bits).
         times_us: ``(N,)`` event times, sorted; ``x``, ``y`` pixel, ``is_on`` polarity.
         exposure_start_us: ``(F,)`` exposure starts; ``exposure_end_us`` their ends.
+        gaps_us: ``(G, 2)`` stretches of the stream whose events were not recorded
+            (:mod:`davis_io.gaps`): no pair of frames is read across one.
     """
 
     frames: np.ndarray
@@ -72,6 +87,17 @@ class CalibrationInput:
     is_on: np.ndarray
     exposure_start_us: np.ndarray
     exposure_end_us: np.ndarray
+    gaps_us: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+
+    def pairs(self, latency_us: int) -> np.ndarray:
+        """``(F-1,)`` True for consecutive frames whose events stay clear of every gap.
+
+        The events of a pair, read ``latency_us`` late, run from the first exposure's start to
+        the second's end.
+        """
+        start = self.exposure_start_us[:-1] + latency_us
+        end = self.exposure_end_us[1:] + latency_us
+        return ~overlapping(self.gaps_us, start, end)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -82,7 +108,9 @@ class CalibrationInput:
 class _Problems:
     """Builds consistency problems over a set of pixels at any latency (the paths built once)."""
 
-    def __init__(self, recording: CalibrationInput, pixels: np.ndarray, levels, knots):
+    def __init__(
+        self, recording: CalibrationInput, pixels: np.ndarray, levels, knots, pairs: np.ndarray
+    ):
         height, width = recording.shape
         lookup = np.full(height * width, -1, np.int64)
         lookup[pixels] = np.arange(len(pixels))
@@ -94,8 +122,8 @@ class _Problems:
         self._recording = recording
         values = recording.frames.reshape(len(recording.frames), -1)[:, pixels]
         inside = (values > levels.low) & (values < levels.high)
-        self.values, self.usable = values, inside[:-1] & inside[1:]
-        self.knots, self.pixels = knots, pixels
+        self.values, self.usable = values, inside[:-1] & inside[1:] & pairs[:, None]
+        self.knots, self.pixels, self.pair_mask = knots, pixels, pairs
 
     def at(self, latency_us: int, factors=None) -> ConsistencyProblem:
         """The problem of these pixels with events moved ``latency_us`` earlier.
@@ -119,20 +147,26 @@ class _Problems:
 
 
 def _best_latency(
-    problems: _Problems, theta: np.ndarray, factors: tuple[np.ndarray, np.ndarray], progress
-) -> int:
+    problems: _Problems,
+    theta: np.ndarray,
+    factors: tuple[np.ndarray, np.ndarray],
+    latencies: tuple[int, ...],
+    progress,
+) -> tuple[int, np.ndarray]:
+    """The latency the disagreement is least at (refined between grid points), and the profile."""
     costs = []
-    for latency in LATENCIES_US:
+    for latency in latencies:
         costs.append(problems.at(latency, factors).disagreement(*theta))
         progress(f"latency {latency / 1000:g} ms: disagreement {costs[-1]:.4f} events²")
+    costs = np.asarray(costs)
     best = int(np.argmin(costs))
     if 0 < best < len(costs) - 1:  # the parabola's vertex through the best and its neighbours
-        x = np.asarray(LATENCIES_US[best - 1 : best + 2], np.float64)
-        y = np.asarray(costs[best - 1 : best + 2])
+        x = np.asarray(latencies[best - 1 : best + 2], np.float64)
+        y = costs[best - 1 : best + 2]
         a, b, _ = np.polyfit(x, y, 2)
         if a > 0:
-            return int(round(np.clip(-b / (2 * a), x[0], x[2])))
-    return int(LATENCIES_US[best])
+            return int(round(np.clip(-b / (2 * a), x[0], x[2]))), costs
+    return int(latencies[best]), costs
 
 
 def _fit_with_factors(subset: _Problems, every: ConsistencyProblem, theta, rounds, progress):
@@ -153,67 +187,126 @@ def _split_half_spread(recording, subset: _Problems, every, theta, levels) -> np
     """Half the difference of the thresholds two disjoint halves of the pixels give."""
     halves = []
     for pixels in (subset.pixels[0::2], subset.pixels[1::2]):
-        half = _Problems(recording, pixels, levels, subset.knots)
+        half = _Problems(recording, pixels, levels, subset.knots, subset.pair_mask)
         problem = half.at(every.latency_us, (every.factor_on, every.factor_off))
         halves.append(fit_thresholds(problem, theta, tolerance=1e-4)[0])
     return 0.5 * np.abs(halves[0] - halves[1])
 
 
-def _choose_pixels(recording: CalibrationInput, levels: FrameLevels, seed: int) -> np.ndarray:
+def _choose_pixels(
+    recording: CalibrationInput, levels: FrameLevels, pairs: np.ndarray, seed: int
+) -> np.ndarray:
+    """Up to :data:`SUBSET_PIXELS` pixels with at least two usable pairs (none: empty)."""
     values = recording.frames.reshape(len(recording.frames), -1)
     inside = (values > levels.low) & (values < levels.high)
-    candidates = np.flatnonzero((inside[:-1] & inside[1:]).sum(axis=0) >= 2)
-    if len(candidates) == 0:
-        raise UsageError(
-            "no pixel has two consecutive frames that are neither black nor clipped: the "
-            "sensor cannot be calibrated from this recording; record a scene with mid-tones, "
-            "or give the thresholds (--threshold)"
-        )
+    usable = inside[:-1] & inside[1:] & pairs[:, None]
+    candidates = np.flatnonzero(usable.sum(axis=0) >= 2)
     rng = np.random.default_rng(seed)
     return np.sort(rng.choice(candidates, min(SUBSET_PIXELS, len(candidates)), replace=False))
+
+
+def _latency_grid(recording: CalibrationInput) -> tuple[np.ndarray, tuple[int, ...]]:
+    """The frame pairs to read and the latencies to try, so that no pair reaches into a gap.
+
+    The pairs usable at every latency of :data:`LATENCIES_US` when there are any; else the pairs
+    usable without latency, read only at the latencies that keep every one of them clear.
+    """
+    every = np.ones(max(len(recording.frames) - 1, 0), dtype=bool)
+    for latency in LATENCIES_US:
+        every &= recording.pairs(latency)
+    if every.any():
+        return every, LATENCIES_US
+    pairs = recording.pairs(0)
+    latencies = tuple(
+        latency for latency in LATENCIES_US if np.array_equal(recording.pairs(latency), pairs)
+    )
+    return pairs, latencies
+
+
+@dataclass
+class _Consistency:
+    """What frame/event consistency measured: the raw estimates, before their review."""
+
+    theta: np.ndarray
+    spread: np.ndarray
+    scale: CommonScale
+    latency_us: int
+    latency_costs: np.ndarray
+    latencies: tuple[int, ...]
+    problem: ConsistencyProblem
+    every: ConsistencyProblem
+    residual: np.ndarray
+    response: InverseResponse
+
+
+def _consistency(
+    recording: CalibrationInput, levels: FrameLevels, seed: int, progress
+) -> _Consistency | None:
+    """Thresholds, pixel factors, latency and response from the pairs of consecutive exposures.
+
+    None when no pixel has two usable pairs (frames black or clipped, or the stream's gaps
+    leave no pair of exposures with the events between them).
+    """
+    pairs, latencies = _latency_grid(recording)
+    pixels = _choose_pixels(recording, levels, pairs, seed)
+    if len(pixels) == 0:
+        return None
+    knots = place_knots(recording.frames, levels, KNOTS, recording.adc_step)
+    height, width = recording.shape
+    subset = _Problems(recording, pixels, levels, knots, pairs)
+    everything = _Problems(recording, np.arange(height * width), levels, knots, pairs)
+    theta, _, _ = fit_thresholds(subset.at(0), (0.3, 0.3))
+    every = everything.at(0)
+    theta, _ = _fit_with_factors(subset, every, theta, 1, progress)
+    for rounds in LATENCY_ROUNDS:
+        factors = (every.factor_on, every.factor_off)
+        latency, costs = _best_latency(subset, theta, factors, latencies, progress)
+        every = everything.at(latency, factors)
+        theta, problem = _fit_with_factors(subset, every, theta, rounds, progress)
+    spread = _split_half_spread(recording, subset, every, theta, levels)
+    scale = common_scale(problem, theta, progress)
+    residual, response = problem.solve(*scale.theta)
+    return _Consistency(
+        theta=scale.theta,
+        spread=np.maximum(spread, scale.theta * scale.width),
+        scale=scale,
+        latency_us=latency,
+        latency_costs=costs,
+        latencies=latencies,
+        problem=problem,
+        every=every,
+        residual=residual,
+        response=response,
+    )
 
 
 def calibrate_frames(
     recording: CalibrationInput, *, seed: int = 0, progress: Progress | None = None
 ) -> SensorCalibration:
-    """Measure the sensor from its frames and events.
+    """Measure the sensor from its frames and events; assume (and say so) what cannot be.
 
     Raises:
-        UsageError: fewer than two frames, or no usable pixel.
+        UsageError: fewer than two frames.
     """
     progress = progress or (lambda _line: None)
     if len(recording.frames) < 2:
         raise UsageError("calibration needs at least two frames; record longer")
+    notes = Assumptions(progress)
     levels = frame_levels(recording.frames, recording.adc_step)
-    knots = place_knots(recording.frames, levels, KNOTS, recording.adc_step)
     height, width = recording.shape
-    subset = _Problems(recording, _choose_pixels(recording, levels, seed), levels, knots)
-    everything = _Problems(recording, np.arange(height * width), levels, knots)
-    theta, _, _ = fit_thresholds(subset.at(0), (0.3, 0.3))
-    every = everything.at(0)
-    theta, _ = _fit_with_factors(subset, every, theta, 1, progress)
-    for rounds in LATENCY_ROUNDS:
-        latency = _best_latency(subset, theta, (every.factor_on, every.factor_off), progress)
-        every = everything.at(latency, (every.factor_on, every.factor_off))
-        theta, problem = _fit_with_factors(subset, every, theta, rounds, progress)
-    spread = _split_half_spread(recording, subset, every, theta, levels)
-    scale = common_scale(problem, theta, progress)
-    theta, spread = scale.theta, np.maximum(spread, scale.theta * scale.width)
-    residual, response = problem.solve(*theta)
-    pile_up = levels.black_level if levels.black_level > 0 else None
-    black, power, straightness = linear_fit(response, pile_up)
-    is_linear = straightness < LINEAR_RMS
-    progress(
-        f"response {'linear' if is_linear else 'not linear'}: the free curve is a power "
-        f"{power:.2f} of v - {black:.3f} to {straightness:.3f} RMS"
-    )
     dead_time = dead_time_us(recording.times_us, recording.x, recording.y, width)
     progress(f"pixel dead time {dead_time} µs")
-    black_level = levels.black_level or (black if is_linear else 0.0)
+    if not notes.check("dead_time_us", dead_time, DEAD_TIME_US, "no dead time (0)"):
+        dead_time = 0
+    found = _consistency(recording, levels, seed, progress)
+    if found is None:
+        return _without_consistency(levels, dead_time, notes)
+    theta, spread = _reviewed_thresholds(found, notes)
+    latency = _reviewed_latency(found, notes)
+    factor_on, factor_off = _reviewed_factors(found.every, notes)
+    black, saturation, is_linear = _reviewed_response(found, levels, notes, progress)
     noise = (
-        frame_noise(recording.frames, black_level, levels.saturation, recording.adc_step)
-        if is_linear
-        else None
+        frame_noise(recording.frames, black, saturation, recording.adc_step) if is_linear else None
     )
     if noise:
         progress(
@@ -226,27 +319,145 @@ def calibrate_frames(
         threshold_on_sd=float(spread[0]),
         threshold_off_sd=float(spread[1]),
         latency_us=latency,
-        black_level=black_level,
-        saturation=levels.saturation,
-        response_linear=bool(is_linear),
+        black_level=black,
+        saturation=saturation,
+        response_linear=is_linear,
         dead_time_us=dead_time,
         noise_gain=noise.gain if noise else 0.0,
         noise_floor=noise.floor if noise else 0.0,
-        response_value=response.knots,
-        response_log_exposure=response.log_exposure,
-        pixel_factor_on=every.factor_on.reshape(height, width).astype(np.float32),
-        pixel_factor_off=every.factor_off.reshape(height, width).astype(np.float32),
-        residual_events=float(np.sqrt(np.mean(residual**2)) / (0.5 * theta.sum())),
-        pairs=problem.pairs,
-        source="measured" if scale.measured else "measured ratio, nominal scale",
-        method="frame/event consistency of consecutive exposures (blur integral, free "
-        "inverse response, per-pixel factors), latency profiled, the common scale "
-        f"{'pinned by the blur' if scale.measured else 'nominal: the blur does not pin it'}; "
-        "uncertainty: split-half spread over the pixels (and the profile's width where the "
-        "scale is nominal); dead time: 1st percentile of a pixel's event intervals"
-        + (
-            "; frame noise: same-colour neighbours in the smoothest places of each level"
-            if noise
-            else ""
-        ),
+        response_value=found.response.knots,
+        response_log_exposure=found.response.log_exposure,
+        pixel_factor_on=factor_on.reshape(height, width).astype(np.float32),
+        pixel_factor_off=factor_off.reshape(height, width).astype(np.float32),
+        residual_events=float(np.sqrt(np.mean(found.residual**2)) / (0.5 * theta.sum())),
+        pairs=found.problem.pairs,
+        source=_source(notes),
+        method=_METHOD + (f"; frame noise: {_NOISE_METHOD}" if noise else ""),
+        assumed=dict(notes.reasons),
+    )
+
+
+_METHOD = (
+    "frame/event consistency of consecutive exposures (blur integral, free inverse response, "
+    "per-pixel factors), no pair across a gap in the events, latency profiled; each estimate "
+    "checked against its search's bounds and what a DAVIS can have; uncertainty: the larger of "
+    "a split-half spread over the pixels and the width of the common scale's profile (or the "
+    "range it cannot tell apart); dead time: 1st percentile of a pixel's event intervals"
+)
+_NOISE_METHOD = "same-colour neighbours in the smoothest places of each level"
+_NOMINAL = f"the nominal {DEFAULT_THRESHOLD} for ON and OFF, ± 50 %"
+
+
+def _source(notes: Assumptions) -> str:
+    if "thresholds" in notes:
+        return "assumed"
+    return "measured ratio, nominal scale" if "threshold_scale" in notes else "measured"
+
+
+def _nominal() -> tuple[np.ndarray, np.ndarray]:
+    """The nominal thresholds and their wide uncertainty (half their value)."""
+    theta = np.array([DEFAULT_THRESHOLD, DEFAULT_THRESHOLD])
+    return theta, 0.5 * theta
+
+
+def _reviewed_thresholds(found: _Consistency, notes: Assumptions) -> tuple[np.ndarray, np.ndarray]:
+    """The fitted thresholds, or the nominal ones where the fit ran to a bound or off range."""
+    low, high = THRESHOLD_RANGE
+    if min(found.theta) <= low * 1.05 or max(found.theta) >= high * 0.95:
+        notes.add("thresholds", f"the fit ran to its search's bound ({low}-{high})", _NOMINAL)
+        return _nominal()
+    if not all(THRESHOLD.holds(float(value)) for value in found.theta):
+        notes.add(
+            "thresholds",
+            f"ON {found.theta[0]:.3f} and OFF {found.theta[1]:.3f}: outside what a DAVIS can "
+            f"have ({THRESHOLD.describe()})",
+            _NOMINAL,
+        )
+        return _nominal()
+    if not found.scale.measured:
+        notes.add(
+            "threshold_scale",
+            "the frames are too sharp for the blur to pin the thresholds' common scale",
+            f"the nominal {DEFAULT_THRESHOLD} with the measured ratio",
+        )
+    return found.theta, found.spread
+
+
+def _reviewed_latency(found: _Consistency, notes: Assumptions) -> int:
+    """The profiled latency, or 0 where the profile is flat, ends at its bound or is off range."""
+    instead = "no latency (0 ms)"
+    if len(found.latencies) < 2 or flat_profile(found.latency_costs):
+        notes.add("latency_us", "the disagreement hardly changes with it (a flat profile)", instead)
+        return 0
+    if len(found.latencies) > 2 and found.latency_us >= found.latencies[-1]:
+        top = found.latencies[-1] / 1000
+        notes.add("latency_us", f"the profile's best is its last value, {top:g} ms", instead)
+        return 0
+    if not notes.check("latency_us", found.latency_us, LATENCY_US, instead):
+        return 0
+    return found.latency_us
+
+
+def _reviewed_factors(
+    every: ConsistencyProblem, notes: Assumptions
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every pixel's ON and OFF factors, or ones where their spread says nothing was learned."""
+    factors = np.concatenate([every.factor_on, every.factor_off])
+    moved = factors[factors != 1.0]
+    spread = float(np.std(moved)) if len(moved) else 0.0
+    if notes.check("pixel_factors", spread, FACTOR_SPREAD, "every pixel's factor 1"):
+        return every.factor_on, every.factor_off
+    return np.ones_like(every.factor_on), np.ones_like(every.factor_off)
+
+
+def _reviewed_response(
+    found: _Consistency, levels: FrameLevels, notes: Assumptions, progress
+) -> tuple[float, float, bool]:
+    """The frames' black and clip levels and whether their response is linear.
+
+    A linear response needs a black level a DAVIS can have: one its search had to put below
+    zero means the curve is not the line it looked like.
+    """
+    pile_up = levels.black_level if levels.black_level > 0 else None
+    black, power, straightness = linear_fit(found.response, pile_up)
+    is_linear = straightness < LINEAR_RMS
+    progress(
+        f"response {'linear' if is_linear else 'not linear'}: the free curve is a power "
+        f"{power:.2f} of v - {black:.3f} to {straightness:.3f} RMS"
+    )
+    if is_linear and pile_up is None and not BLACK_LEVEL.holds(black):
+        notes.add(
+            "response",
+            f"the free curve is straight only in ln(v - {black:.3f}), below any black level a "
+            "frame can have",
+            "a response the fit learns, black at 0",
+        )
+        is_linear = False
+    return levels.black_level or (black if is_linear else 0.0), levels.saturation, is_linear
+
+
+def _without_consistency(
+    levels: FrameLevels, dead_time: int, notes: Assumptions
+) -> SensorCalibration:
+    """The nominal sensor with what the frames and events alone measure (levels, dead time)."""
+    why = (
+        "no pixel has two pairs of consecutive exposures with usable values and the events "
+        "between them (frames black or clipped, or gaps in the stream)"
+    )
+    theta, spread = _nominal()
+    notes.add("thresholds", why, _NOMINAL)
+    notes.add("latency_us", why, "no latency (0 ms)")
+    notes.add("pixel_factors", why, "every pixel's factor 1")
+    notes.add("response", why, "a response the fit learns")
+    return SensorCalibration(
+        threshold_on=float(theta[0]),
+        threshold_off=float(theta[1]),
+        threshold_on_sd=float(spread[0]),
+        threshold_off_sd=float(spread[1]),
+        black_level=levels.black_level,
+        saturation=levels.saturation,
+        dead_time_us=dead_time,
+        source="assumed",
+        method="the frames' levels and the pixels' dead time measured; nothing else could be",
+        assumed=dict(notes.reasons),
     )

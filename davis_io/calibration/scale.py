@@ -56,6 +56,20 @@ class ScaleProfile:
         low, high = self.interval
         return low > 1 / np.sqrt(2) + 1e-9 and high < np.sqrt(2) - 1e-9
 
+    def half_width(self) -> float:
+        """Half the range of ln(scale) over which the disagreement rises under PINNED_RISE.
+
+        From a parabola in ln(scale) through the finite points within a factor of √2 of the
+        fit (where the profile is nearly quadratic); infinite when it does not curve up. Two
+        standard uncertainties of the scale: on the emulated recordings the truth lay inside.
+        """
+        log_scale = np.log(self.scales)
+        near = (np.abs(log_scale) <= np.log(np.sqrt(2)) + 1e-9) & np.isfinite(self.rise)
+        if near.sum() < 3:
+            return float("inf")
+        curvature = float(np.polyfit(log_scale[near], self.rise[near], 2)[0])
+        return float(np.sqrt(PINNED_RISE / curvature)) if curvature > 0 else float("inf")
+
     def describe(self) -> str:
         """One line: the rise at each scale."""
         pairs = zip(self.scales, self.rise, strict=True)
@@ -77,8 +91,8 @@ class CommonScale:
         theta: ``(2,)`` ON and OFF thresholds.
         measured: the blur pins the scale; else it is the nominal
             :data:`~davis_io.session.DEFAULT_THRESHOLD` and only the ratio is measured.
-        width: half the range of scales the recording cannot tell apart, relative (0 when
-            measured).
+        width: the scale's standard uncertainty, relative: half of :meth:`ScaleProfile.half_width`
+            where measured, half the range of scales the recording cannot tell apart where not.
     """
 
     theta: np.ndarray
@@ -93,7 +107,7 @@ def common_scale(
     profile = scale_profile(problem, theta)
     progress(f"common scale {'pinned' if profile.pinned else 'free'}: {profile.describe()}")
     if profile.pinned:
-        return CommonScale(theta, True)
+        return CommonScale(theta, True, profile.half_width() / 2)
     low, high = profile.interval
     progress(
         "the thresholds' common scale is not measurable here (frames too sharp): nominal "

@@ -42,6 +42,7 @@ def _recording(session: Session) -> CalibrationInput:
         is_on=events["p"] > 0,
         exposure_start_us=start,
         exposure_end_us=end,
+        gaps_us=session.event_gaps(),
     )
 
 

@@ -16,6 +16,12 @@ __all__ = ["HELP", "add_arguments", "run"]
 
 HELP = "record APS frames and DVS events in sync into a session folder"
 
+FRAME_INTERVAL_S = Bounds(1e-6, 60.0, "s")
+"""Time between frame starts: a frame a minute at the longest."""
+
+STILL_FRAMES = Bounds(0, 10_000, "frames", integer=True)
+"""Frames the emulated camera may be held still for."""
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the options of ``seecap record``."""
@@ -55,6 +61,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --emulate: seed of the shake, noise and sensor",
     )
     parser.add_argument(
+        "--event-window",
+        metavar="DURATION",
+        help="with --emulate: keep only the events this near an exposure (3ms: a recording made "
+        "view by view, or a stream with long gaps; default: every event)",
+    )
+    parser.add_argument(
+        "--still-frames",
+        type=STILL_FRAMES.argument("--still-frames"),
+        default=0,
+        help="with --emulate: hold the camera still (no move, no shake) for this many frames "
+        "in the middle of the recording",
+    )
+    parser.add_argument(
         "--color-filter",
         choices=[c.value for c in ColorFilter if c.is_color],
         help="with --replay: the sensor's colour filter, for a file of demosaiced colour frames "
@@ -71,8 +90,12 @@ def run(args: argparse.Namespace) -> int:
     from davis_io.capture import CaptureRequest, record_capture
     from davis_io.session.folder import default_session_name
 
-    if args.emulate is None and (args.sensor != "default" or args.seed):
-        raise UsageError("--sensor and --seed choose the emulated camera: use them with --emulate")
+    emulator_only = args.sensor != "default" or args.seed or args.event_window or args.still_frames
+    if args.emulate is None and emulator_only:
+        raise UsageError(
+            "--sensor, --seed, --event-window and --still-frames describe the emulated camera: "
+            "use them with --emulate"
+        )
     if args.replay is None and args.color_filter is not None:
         raise UsageError("--color-filter describes a replayed file's sensor: use it with --replay")
     request = CaptureRequest(
@@ -85,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
         sensor=args.sensor,
         seed=args.seed,
         color_filter=None if args.color_filter is None else ColorFilter(args.color_filter),
+        event_window_us=_duration(args.event_window, "--event-window", EXPOSURE_S) or 0,
+        still_frames=args.still_frames,
     )
     if args.replay is not None and args.exposure is not None:
         print(
@@ -111,10 +136,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"seecap: warning: record: {result.manifest.stop_reason}", file=sys.stderr)
         return 1
     return 0
-
-
-FRAME_INTERVAL_S = Bounds(1e-6, 60.0, "s")
-"""Time between frame starts: a frame a minute at the longest."""
 
 
 def _duration(text: str | None, what: str, bounds: Bounds | None = None) -> int | None:

@@ -56,6 +56,11 @@ class EmulatorConfig:
         packet_us: device time per packet, µs.
         imu_rate_hz: IMU samples per second (ideal gyro and accelerometer, camera axes); 0 for
             none.
+        event_window_us: keep only the events within this many µs of an exposure (a recording
+            made view by view, or a stream with long gaps); 0 keeps every event.
+        still_frames: this many frames in the middle of the recording are taken with the camera
+            held still at one place (no move, no shake: only the pixels' noise fires); 0 for
+            none.
     """
 
     scene: str = "room"
@@ -83,6 +88,8 @@ class EmulatorConfig:
     seed: int = 0
     packet_us: int = 10_000
     imu_rate_hz: int = 1000
+    event_window_us: int = 0
+    still_frames: int = 0
 
     def __post_init__(self) -> None:
         try:
@@ -103,6 +110,11 @@ class EmulatorConfig:
             problems.append("gain exposure and noise scale must not be negative")
         if min(self.exposure_us, self.readout_us, self.dvs_step_us, self.packet_us) <= 0:
             problems.append("exposure, readout, DVS step and packet durations must be positive")
+        if self.event_window_us < 0 or not 0 <= self.still_frames <= max(self.frames - 2, 0):
+            problems.append(
+                "the event window must not be negative, and still frames leave at least one "
+                "moving frame on either side"
+            )
         if not 0 <= self.imu_rate_hz <= 1_000_000:
             problems.append(f"IMU rate {self.imu_rate_hz} Hz must be within 0..1000000")
         shortest_us = self.exposure_us + 2 * self.readout_us + self.dvs_step_us
@@ -171,6 +183,30 @@ class EmulatorConfig:
         exposure_start = start + self.readout_us
         exposure_end = exposure_start + self.exposure_us
         return np.stack([start, exposure_start, exposure_end, exposure_end + self.readout_us], 1)
+
+    @property
+    def still_range(self) -> range:
+        """The frames taken with the camera held still (empty without ``still_frames``)."""
+        first = (self.frames - self.still_frames) // 2
+        return range(first, first + self.still_frames)
+
+    def still_us(self) -> tuple[int, int] | None:
+        """From the end of the exposure before the still frames to the end of the last one."""
+        if not self.still_frames:
+            return None
+        windows = self.frame_windows()
+        still = self.still_range
+        return int(windows[still.start - 1, 2]), int(windows[still.stop - 1, 2])
+
+    def event_kept(self, times_us: np.ndarray) -> np.ndarray:
+        """Which events ``(N,)`` the recording keeps: all, or those near an exposure."""
+        if not self.event_window_us:
+            return np.ones(len(times_us), dtype=bool)
+        windows = self.frame_windows()
+        starts = windows[:, 1] - self.event_window_us
+        ends = windows[:, 2] + self.event_window_us
+        index = np.searchsorted(starts, times_us, side="right") - 1
+        return (index >= 0) & (times_us <= ends[np.maximum(index, 0)])
 
     @property
     def end_us(self) -> int:

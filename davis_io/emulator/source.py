@@ -45,10 +45,13 @@ __all__ = ["EmulatedCamera"]
 def _build_trajectory(config: EmulatorConfig, scene: Scene) -> Trajectory:
     """The true camera path of a recording with these settings."""
     baseline = config.baseline_m or scene.baseline
-    positions = grid_positions(
-        config.frames, np.asarray(scene.camera_center), baseline, offset=False
-    )
-    shake = Shake(config.shake, config.shake_translation_m, config.seed)
+    moving = config.frames - config.still_frames
+    positions = grid_positions(moving, np.asarray(scene.camera_center), baseline, offset=False)
+    still = config.still_range
+    if config.still_frames:  # held still where the frame before the stretch was taken
+        held = np.repeat(positions[still.start - 1 : still.start], config.still_frames, axis=0)
+        positions = np.concatenate([positions[: still.start], held, positions[still.start :]])
+    shake = Shake(config.shake, config.shake_translation_m, config.seed, config.still_us())
     windows = config.frame_windows()[:, 1:3]
     return Trajectory(positions, np.asarray(scene.target), windows, shake)
 
@@ -192,12 +195,13 @@ class EmulatedCamera(Closing):
             chunk_end = chunk_start + config.packet_us
             steps = np.flatnonzero((step_times >= chunk_start) & (step_times < chunk_end))
             events = [pixels.step(self.sensor_image(poses[i]), int(step_times[i])) for i in steps]
+            events = np.concatenate(events) if events else empty_events()
             frames = []
             while next_frame < len(windows) and windows[next_frame, 3] < chunk_end:
                 frames.append(self._frame(windows[next_frame], aps_rng))
                 next_frame += 1
             yield Packet(
-                events=np.concatenate(events) if events else empty_events(),
+                events=events[config.event_kept(events["t"])],
                 frames=frames,
                 imu=_within(imu, chunk_start, chunk_end),
                 triggers=_within(triggers, chunk_start, chunk_end),

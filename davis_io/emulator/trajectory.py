@@ -27,6 +27,9 @@ __all__ = [
 
 _DOWN = np.array([0.0, 1.0, 0.0])
 
+STILL_RAMP_US = 100_000
+"""How long the shake takes to fade out before a still stretch and back in after it."""
+
 
 def look_at(positions: np.ndarray, target: np.ndarray) -> np.ndarray:
     """Camera-to-world poses ``(N, 4, 4)`` at ``positions`` ``(N, 3)`` looking at ``target``.
@@ -91,6 +94,9 @@ class Shake:
     rotation_deg: float
     translation_m: float
     seed: int
+    still_us: tuple[int, int] | None = None
+    """A stretch ``(start, end)`` in which the hand holds still: the shake fades out over
+    :data:`STILL_RAMP_US` before it and back in after it."""
 
     def _components(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rng = np.random.default_rng([self.seed, 0x5A4E])
@@ -104,11 +110,22 @@ class Shake:
         amplitude[3:] *= self.translation_m
         return frequency_hz, phase, amplitude
 
+    def envelope(self, times_us: np.ndarray) -> np.ndarray:
+        """The shake's strength ``(N,)`` at ``times_us``: 1, down to 0 in the still stretch."""
+        if self.still_us is None:
+            return np.ones(len(times_us))
+        start, end = self.still_us
+        before = np.clip((start - times_us) / STILL_RAMP_US, 0, 1)
+        after = np.clip((times_us - end) / STILL_RAMP_US, 0, 1)
+        fade = np.maximum(before, after)
+        return fade**3 * (10 - 15 * fade + 6 * fade**2)  # minimum jerk: no kick at either end
+
     def offsets(self, times_us: np.ndarray) -> np.ndarray:
         """Camera-frame motion ``(N, 4, 4)`` at ``times_us``: apply as ``base @ offset``."""
         frequency_hz, phase, amplitude = self._components()
         seconds = np.asarray(times_us, np.float64).reshape(-1, 1, 1) * 1e-6
         signal = (amplitude * np.sin(2 * np.pi * frequency_hz * seconds + phase)).sum(axis=2)
+        signal *= self.envelope(np.asarray(times_us, np.float64).ravel())[:, None]
         offsets = np.tile(np.eye(4), (len(signal), 1, 1))
         offsets[:, :3, :3] = rotation_from_vector(signal[:, :3])
         offsets[:, :3, 3] = signal[:, 3:]

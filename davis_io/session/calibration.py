@@ -66,9 +66,15 @@ class SensorCalibration:
         pairs: consecutive-frame pixel pairs the fit used.
         source: ``measured``, ``measured ratio, nominal scale`` (frames too sharp for the blur
             to pin the scale: the thresholds' ratio and pixel factors are measured, their common
-            scale is :data:`~davis_io.session.DEFAULT_THRESHOLD`), ``given``, ``truth`` or
-            ``default`` (nothing could be measured).
+            scale is :data:`~davis_io.session.DEFAULT_THRESHOLD`), ``assumed`` (the thresholds
+            could not be measured: the nominal ones, with a wide uncertainty), ``given``,
+            ``truth`` or ``default`` (nothing could be measured).
         method: one line saying how the values were found.
+        assumed: the values that were not measured, each with why (an estimate at its search's
+            bound, outside what a DAVIS can have, from a flat profile, or no data for it): a
+            prior (the nominal value) stands in for each, which later stages treat as such.
+            Keys are field names (``thresholds``, ``threshold_scale``, ``pixel_factors``,
+            ``latency_us``, ``dead_time_us``, ``black_level``, ``saturation``, ``response``).
     """
 
     threshold_on: float
@@ -91,6 +97,12 @@ class SensorCalibration:
     pairs: int = 0
     source: str = "measured"
     method: str = ""
+    assumed: dict[str, str] = dataclasses.field(default_factory=dict)
+
+    @property
+    def thresholds_measured(self) -> bool:
+        """The thresholds (their scale included) were measured from the recording or stated."""
+        return "thresholds" not in self.assumed and "threshold_scale" not in self.assumed
 
     @property
     def threshold(self) -> float:
@@ -149,6 +161,7 @@ class SensorCalibration:
                 f"frames and events agree to {self.residual_events:.2f} events RMS over "
                 f"{self.pairs} pixel pairs"
             )
+        lines += [f"assumed {name}: {why}" for name, why in self.assumed.items()]
         return "\n".join(lines) + (f"\nmethod: {self.method}" if self.method else "")
 
 

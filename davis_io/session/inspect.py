@@ -104,6 +104,7 @@ def _summary(session: Session) -> dict:
         "exposure_requested_us": manifest.exposure_requested_us,
         "exposure_measured_us": _median(table.exposure_us),
         "frames_events_lost": int(table.events_lost.sum()),
+        "event_gaps": _gaps(session.event_gaps()),
         "events_per_exposure_median": None if counts is None else _median(counts),
         "bins_stored": session.stored_bins(),
         "drops": dataclasses.asdict(manifest.drops),
@@ -123,6 +124,17 @@ def _calibration(session: Session) -> dict | None:
         for key, value in facts.items()
         if key != "method"
     }
+
+
+def _gaps(gaps: np.ndarray) -> str:
+    """How many gaps the event stream has and how long they are."""
+    if len(gaps) == 0:
+        return "none"
+    lengths_ms = (gaps[:, 1] - gaps[:, 0]) / 1000
+    return (
+        f"{len(gaps)}, {lengths_ms.min():.1f}-{lengths_ms.max():.1f} ms (no frame pair, bin or "
+        "event loss spans them)"
+    )
 
 
 def _median(values: np.ndarray) -> int | None:

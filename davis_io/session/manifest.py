@@ -85,6 +85,9 @@ class SessionManifest:
         frame_count: frames stored.
         event_count: events stored.
         drops: loss counters.
+        event_gaps_us: ``[start, end]`` of every gap in the event stream, µs: no event
+            anywhere for far longer than its rate allows (:mod:`davis_io.gaps`); None when the
+            recorder did not look (older sessions: found from the events when read).
         format_version: session format version (1).
         tool_version: seecap version that wrote the session.
     """
@@ -109,6 +112,7 @@ class SessionManifest:
     frame_count: int = 0
     event_count: int = 0
     drops: DropCounters = field(default_factory=DropCounters)
+    event_gaps_us: list[list[int]] | None = None
     format_version: int = FORMAT_VERSION
     tool_version: str = __version__
 
@@ -190,6 +194,13 @@ class SessionManifest:
 _SIZE = Bounds(1, 8192, "pixels", integer=True)
 _COUNT = Bounds(0, 2**62, integer=True)
 _DURATION_US = Bounds(0, 30 * 86_400 * 1_000_000, "µs", integer=True)
+
+
+def _is_time(value) -> bool:
+    """A device time in µs: a whole number (not a bool) of a plausible size."""
+    return isinstance(value, int) and not isinstance(value, bool) and abs(value) < 2**62
+
+
 _VALUE_BOUNDS = {
     "width": _SIZE,
     "height": _SIZE,
@@ -213,6 +224,9 @@ def _check_values(manifest: SessionManifest, where: str) -> None:
         problem = _COUNT.problem(f"field 'drops.{name}'", value)
         if problem is not None:
             raise SessionError(f"{where}: {problem}")
+    for gap in manifest.event_gaps_us or ():
+        if not (isinstance(gap, list) and len(gap) == 2 and all(_is_time(v) for v in gap)):
+            raise SessionError(f"{where}: field 'event_gaps_us' holds {gap!r}, not [start, end]")
     if manifest.color_filter not in {pattern.value for pattern in ColorFilter}:
         names = ", ".join(pattern.value for pattern in ColorFilter)
         raise SessionError(
@@ -227,6 +241,7 @@ _JSON_TYPES: dict[str, tuple[type, ...]] = {
     "int | None": (int, type(None)),
     "dict": (dict,),
     "list[str]": (list,),
+    "list[list[int]] | None": (list, type(None)),
 }
 """The JSON types a field's annotation allows (``drops`` is checked on its own)."""
 _FIELD_TYPES = {

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from davis_io.bins import ExposureBins, bin_exposure
+from davis_io.gaps import event_gaps, long_intervals
 from davis_io.session.event_order import EventOrder
 from davis_io.session.manifest import DropCounters
 from davis_io.session.status import frame_warnings
@@ -57,6 +58,15 @@ class Progress:
     """What the source said it skipped or lost (the first :data:`MAX_SOURCE_NOTES`)."""
     truncated_at: int | None = None
     """Byte offset at which the source's file ended inside a record (None: it did not)."""
+    long_intervals: list[np.ndarray] = field(default_factory=list)
+    """Event-free stretches long enough to be gaps (:func:`davis_io.gaps.long_intervals`)."""
+
+    def event_gaps(self, event_count: int) -> np.ndarray:
+        """The gaps of the stream so far (:func:`davis_io.gaps.event_gaps`)."""
+        if self.first_t_us is None:
+            return np.zeros((0, 2), np.int64)
+        candidates = np.concatenate([np.zeros((0, 2), np.int64), *self.long_intervals])
+        return event_gaps(candidates, event_count, self.latest_t_us - self.first_t_us)
 
     def take_warnings(self) -> list[str]:
         """Remove and return the warnings raised since the last call (thread-safe)."""
@@ -253,9 +263,13 @@ class _WriterState:
         self.writer.write_events(events)
         self.progress.events = self.writer.events_received
         if len(events):
-            if self.progress.first_t_us is None:
-                self.progress.first_t_us = int(events["t"][0])
-            self.progress.latest_t_us = int(events["t"][-1])
+            progress = self.progress
+            intervals = long_intervals(events["t"], progress.latest_t_us)
+            if len(intervals):
+                progress.long_intervals.append(intervals)
+            if progress.first_t_us is None:
+                progress.first_t_us = int(events["t"][0])
+            progress.latest_t_us = int(events["t"][-1])
 
     def _submit(self, closed: list[ClosedWindow]) -> None:
         for window in closed:

@@ -272,6 +272,7 @@ class _Run:
         manifest.exposure_measured_us = self.progress.exposure_measured_us
         manifest.stop_time_utc = datetime.now(UTC).isoformat(timespec="seconds")
         manifest.source_notes = list(self.progress.source_notes)
+        manifest.event_gaps_us = self.progress.event_gaps(self.writer.events_written).tolist()
         message = self._error_message(storage_error)
         reason = message or self._stop_reason()
         clean = not reason and (outcome.source_exhausted or outcome.limit_reached)

@@ -13,6 +13,7 @@ import numpy as np
 
 from davis_io.bins import bin_exposure
 from davis_io.errors import SessionError
+from davis_io.gaps import find_gaps, overlapping
 from davis_io.session.calibration import (
     SensorCalibration,
     read_calibration,
@@ -69,6 +70,7 @@ class Session(Closing):
         self.manifest = manifest
         self._h5 = h5
         self.needs_repair = needs_repair
+        self._found_gaps: np.ndarray | None = None
 
     @classmethod
     def open(cls, path: Path | str) -> Session:
@@ -224,7 +226,24 @@ class Session(Closing):
             return FramesTable(empty, empty, empty, empty, np.zeros(0, np.bool_))
         frames = self._h5["frames"]
         columns = {name: frames[name][:count] for name in (*FRAME_TIMES, "events_lost")}
+        # An exposure that overlaps a gap in the stream lost its events, as a dropped packet's.
+        columns["events_lost"] = columns["events_lost"] | overlapping(
+            self.event_gaps(), columns["exposure_start_us"], columns["exposure_end_us"]
+        )
         return FramesTable(**columns)
+
+    def event_gaps(self) -> np.ndarray:
+        """``(G, 2)`` start and end of each gap in the event stream, µs (:mod:`davis_io.gaps`).
+
+        As ``session.json`` states them; for a session recorded before they were, found from
+        its events (once per open session).
+        """
+        if self.manifest.event_gaps_us is not None:
+            return np.asarray(self.manifest.event_gaps_us, np.int64).reshape(-1, 2)
+        if self._found_gaps is None:
+            times = self._h5["events"]["t"][: self.event_count] if self.event_count else []
+            self._found_gaps = find_gaps(np.asarray(times, np.int64))
+        return self._found_gaps
 
     def events_between(self, t0_us: int, t1_us: int) -> np.ndarray:
         """Events with ``t0_us <= t <= t1_us`` (both ends included), as ``EVENT_DTYPE``."""
