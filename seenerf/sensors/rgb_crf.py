@@ -161,7 +161,7 @@ class LinearCrf(nn.Module):
         anchor_value: float = 0.5,
     ):
         super().__init__()
-        if not 0.0 <= black < min(anchor_value, saturation):
+        if not self.fits(black, saturation, anchor_value):
             raise ConfigError(
                 f"the measured black level {black:.3f} is not below the anchor value "
                 f"{anchor_value} and the clip level {saturation:.3f}; fit with --response learned"
@@ -169,6 +169,11 @@ class LinearCrf(nn.Module):
         self.black, self.saturation = float(black), float(saturation)
         self.anchor_log_exposure = float(anchor_log_exposure)
         self.slope = float(anchor_value) - self.black
+
+    @staticmethod
+    def fits(black: float, saturation: float, anchor_value: float = 0.5) -> bool:
+        """True when a line from ``black`` through the anchor, clipped at ``saturation``, can be."""
+        return 0.0 <= black < min(anchor_value, saturation)
 
     def forward(self, log_exposure: torch.Tensor) -> torch.Tensor:
         """LDR value of each channel from ln(radiance x seconds)."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import torch
@@ -45,6 +46,9 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
     the calibration measured linear frames (a raw DAVIS frame) and ``config.response`` is
     ``auto``; else the variant's class with the anchor.
 
+    A linear response whose measured levels cannot hold the anchor falls back to the learned
+    one, with a warning: a calibration verdict never stops a fit.
+
     Raises:
         ConfigError: the oracle's session has no true response.
     """
@@ -59,7 +63,15 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
         "anchor_value": config.anchor_value,
     }
     if crf is RgbCrf and config.response == "auto" and data.linear_levels is not None:
-        return LinearCrf(*data.linear_levels, **anchor)
+        if LinearCrf.fits(*data.linear_levels, config.anchor_value):
+            return LinearCrf(*data.linear_levels, **anchor)
+        black, saturation = data.linear_levels
+        warnings.warn(
+            f"the frames were measured linear, but their black level {black:.3f} and clip level "
+            f"{saturation:.3f} leave no room for the anchor value {config.anchor_value}: the "
+            "response is learned instead",
+            stacklevel=2,
+        )
     return crf(**anchor)
 
 

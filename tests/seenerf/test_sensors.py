@@ -237,3 +237,17 @@ def test_learned_colour_mix_starts_as_channel_mean():
     counts = crf(log_e, torch.tensor([[1.0, 0.0, 0.0]]), torch.tensor([0.01]))
     assert counts.item() == pytest.approx(math.log(2) / 0.3, rel=1e-5)
     assert np.isfinite(counts.detach().numpy()).all()
+
+
+def test_linear_levels_that_cannot_hold_the_anchor_fall_back_to_a_learned_response():
+    from seenerf.data.synthetic import plane_scene
+    from seenerf.model.config import FitConfig
+    from seenerf.train.builder import rgb_response
+
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
+    scene.linear_levels = (-0.1, 1.0)  # a black level below zero: no linear response has it
+    with pytest.warns(UserWarning, match="black level -0.100 .* the response is learned"):
+        crf = rgb_response(RgbCrf, scene, FitConfig())
+    assert isinstance(crf, RgbCrf)
+    scene.linear_levels = (0.05, 0.9)
+    assert isinstance(rgb_response(RgbCrf, scene, FitConfig()), LinearCrf)
