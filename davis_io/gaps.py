@@ -14,9 +14,11 @@ import numpy as np
 __all__ = [
     "GAP_EVENTS",
     "MIN_GAP_US",
+    "STILL_GYRO_DPS",
     "event_gaps",
     "find_gaps",
     "long_intervals",
+    "not_still",
     "overlapping",
 ]
 
@@ -26,6 +28,11 @@ MIN_GAP_US = 20_000
 GAP_EVENTS = 1_000
 """A gap is at least as long as the stream takes, at its mean rate outside gaps, to fire this
 many events: a chance lull of that length is practically impossible."""
+
+
+STILL_GYRO_DPS = 1.0
+"""A camera whose gyro reads less than this all through an event-free stretch was held still:
+the stretch is a still scene, not lost data (a hand-held camera turns at several deg/s)."""
 
 
 def long_intervals(times_us: np.ndarray, previous_us: int | None) -> np.ndarray:
@@ -62,12 +69,40 @@ def event_gaps(candidates: np.ndarray, event_count: int, span_us: int) -> np.nda
     return candidates[lengths >= max(MIN_GAP_US, typical_us)]
 
 
-def find_gaps(times_us: np.ndarray) -> np.ndarray:
-    """``(G, 2)`` start and end of every gap in a whole stream's sorted event times."""
+def find_gaps(times_us: np.ndarray, imu_t_us=None, gyro_dps=None) -> np.ndarray:
+    """``(G, 2)`` start and end of every gap in a whole stream's sorted event times.
+
+    With the IMU's times and gyro readings ``(M, 3)``, stretches it shows still are no gaps.
+    """
     times = np.asarray(times_us, np.int64)
     if len(times) < 2:
         return np.zeros((0, 2), np.int64)
-    return event_gaps(long_intervals(times, None), len(times), int(times[-1] - times[0]))
+    gaps = event_gaps(long_intervals(times, None), len(times), int(times[-1] - times[0]))
+    return gaps if imu_t_us is None else not_still(gaps, imu_t_us, gyro_dps)
+
+
+def not_still(gaps: np.ndarray, imu_t_us: np.ndarray, gyro_dps: np.ndarray) -> np.ndarray:
+    """The gaps without the parts in which the IMU shows the camera held still.
+
+    A gap is cut down to the stretch between the first and the last gyro sample inside it
+    that reads at least :data:`STILL_GYRO_DPS` (one sample period wider on each side); a gap
+    with three or more samples inside, all still, is no gap. Without samples it stays whole.
+    """
+    gaps = np.asarray(gaps, np.int64).reshape(-1, 2)
+    times = np.asarray(imu_t_us, np.int64)
+    moving = np.linalg.norm(np.asarray(gyro_dps, np.float64).reshape(-1, 3), axis=1)
+    moving = moving >= STILL_GYRO_DPS
+    period = int(np.median(np.diff(times))) if len(times) > 1 else 0
+    kept = []
+    for start, end in gaps:
+        inside = (times > start) & (times < end)
+        if inside.sum() < 3:
+            kept.append((start, end))
+            continue
+        turning = times[inside & moving]
+        if len(turning):
+            kept.append((max(start, turning[0] - period), min(end, turning[-1] + period)))
+    return np.asarray(kept, np.int64).reshape(-1, 2)
 
 
 def overlapping(gaps: np.ndarray, start_us: np.ndarray, end_us: np.ndarray) -> np.ndarray:

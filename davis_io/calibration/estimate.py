@@ -208,15 +208,16 @@ def _choose_pixels(
 def _latency_grid(recording: CalibrationInput) -> tuple[np.ndarray, tuple[int, ...]]:
     """The frame pairs to read and the latencies to try, so that no pair reaches into a gap.
 
-    The pairs usable at every latency of :data:`LATENCIES_US` when there are any; else the pairs
-    usable without latency, read only at the latencies that keep every one of them clear.
+    The pairs usable at every latency of :data:`LATENCIES_US` while they are most of those
+    usable without latency; else those, read only at the latencies that keep all of them clear
+    (a recording whose events stop a few milliseconds after each exposure).
     """
-    every = np.ones(max(len(recording.frames) - 1, 0), dtype=bool)
+    pairs = recording.pairs(0)
+    every = pairs.copy()
     for latency in LATENCIES_US:
         every &= recording.pairs(latency)
-    if every.any():
+    if every.sum() >= 0.75 * pairs.sum():
         return every, LATENCIES_US
-    pairs = recording.pairs(0)
     latencies = tuple(
         latency for latency in LATENCIES_US if np.array_equal(recording.pairs(latency), pairs)
     )

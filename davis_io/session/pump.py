@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from davis_io.bins import ExposureBins, bin_exposure
-from davis_io.gaps import event_gaps, long_intervals
+from davis_io.gaps import event_gaps, long_intervals, not_still
 from davis_io.session.event_order import EventOrder
 from davis_io.session.manifest import DropCounters
 from davis_io.session.status import frame_warnings
@@ -60,13 +60,18 @@ class Progress:
     """Byte offset at which the source's file ended inside a record (None: it did not)."""
     long_intervals: list[np.ndarray] = field(default_factory=list)
     """Event-free stretches long enough to be gaps (:func:`davis_io.gaps.long_intervals`)."""
+    gyro: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    """The IMU's times and gyro readings, to tell a still camera from lost events."""
 
     def event_gaps(self, event_count: int) -> np.ndarray:
-        """The gaps of the stream so far (:func:`davis_io.gaps.event_gaps`)."""
+        """The gaps of the stream so far (:func:`davis_io.gaps.event_gaps`, minus still ones)."""
         if self.first_t_us is None:
             return np.zeros((0, 2), np.int64)
         candidates = np.concatenate([np.zeros((0, 2), np.int64), *self.long_intervals])
-        return event_gaps(candidates, event_count, self.latest_t_us - self.first_t_us)
+        gaps = event_gaps(candidates, event_count, self.latest_t_us - self.first_t_us)
+        times = np.concatenate([np.zeros(0, np.int64), *(t for t, _ in self.gyro)])
+        gyro = np.concatenate([np.zeros((0, 3), np.float32), *(g for _, g in self.gyro)])
+        return not_still(gaps, times, gyro)
 
     def take_warnings(self) -> list[str]:
         """Remove and return the warnings raised since the last call (thread-safe)."""
@@ -224,6 +229,8 @@ class _WriterState:
         for records in (packet.imu, packet.triggers):
             if len(records):
                 self.sync.note_time(records["t"].max())
+        if len(packet.imu):
+            self.progress.gyro.append((packet.imu["t"].copy(), packet.imu["gyro_dps"].copy()))
         self.writer.write_imu(packet.imu)
         self.writer.write_triggers(packet.triggers)
         for frame in packet.frames:

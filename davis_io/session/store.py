@@ -242,7 +242,8 @@ class Session(Closing):
             return np.asarray(self.manifest.event_gaps_us, np.int64).reshape(-1, 2)
         if self._found_gaps is None:
             times = self._h5["events"]["t"][: self.event_count] if self.event_count else []
-            self._found_gaps = find_gaps(np.asarray(times, np.int64))
+            imu = self.imu()
+            self._found_gaps = find_gaps(np.asarray(times, np.int64), imu["t"], imu["gyro_dps"])
         return self._found_gaps
 
     def events_between(self, t0_us: int, t1_us: int) -> np.ndarray:

@@ -1,0 +1,108 @@
+"""What a calibration cannot measure it says, stores as assumed, and replaces by a prior."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from synthetic_recording import KnownSensor, synthetic_recording
+
+from davis_io.calibration import calibrate_frames
+from davis_io.calibration.estimate import LATENCIES_US
+from davis_io.calibration.plausible import Assumptions, flat_profile
+from davis_io.emulator import Response
+from davis_io.gaps import find_gaps
+
+FILM = Response("film", midpoint=0.4, width=1.2)
+
+
+@pytest.fixture(scope="module")
+def recording():
+    return synthetic_recording(KnownSensor(0.25, 0.35, 0.02, FILM))
+
+
+def _cut(recording, after_frames, margin_us=3_000):
+    """The recording without the events between the exposures after ``after_frames``."""
+    keep = np.ones(len(recording.times_us), bool)
+    for k in after_frames:
+        start = recording.exposure_end_us[k] + margin_us
+        end = recording.exposure_start_us[k + 1] - margin_us
+        keep &= ~((recording.times_us > start) & (recording.times_us < end))
+    return dataclasses.replace(
+        recording,
+        times_us=recording.times_us[keep],
+        x=recording.x[keep],
+        y=recording.y[keep],
+        is_on=recording.is_on[keep],
+    )
+
+
+def test_a_recording_with_gaps_calibrates_without_pairing_across_them(recording):
+    full, theta_on, theta_off = recording
+    cut = _cut(full, after_frames=(1, 3, 5))  # 34 ms without events after frames 1, 3 and 5
+    gaps = find_gaps(cut.times_us)
+    assert len(gaps) == 3
+    told = calibrate_frames(dataclasses.replace(cut, gaps_us=gaps))
+    # Pairs (0, 1), (2, 3), (4, 5), (6, 7) only: the three across gaps are left out.
+    assert told.pairs < 0.65 * calibrate_frames(full).pairs
+    assert told.assumed == {}
+    assert told.threshold_on == pytest.approx(np.median(theta_on), rel=0.03)
+    assert told.threshold_off == pytest.approx(np.median(theta_off), rel=0.03)
+    # Read across the gaps, the frames change by more than their events say: the blur can no
+    # longer pin the thresholds' scale.
+    blind = calibrate_frames(cut)
+    assert "threshold_scale" in blind.assumed
+
+
+def test_with_no_pair_left_only_the_levels_and_dead_time_are_measured(recording):
+    full, _, _ = recording
+    cut = _cut(full, after_frames=range(len(full.frames) - 1))
+    calibration = calibrate_frames(dataclasses.replace(cut, gaps_us=find_gaps(cut.times_us)))
+    assert calibration.source == "assumed"
+    assert set(calibration.assumed) == {"thresholds", "latency_us", "pixel_factors", "response"}
+    assert (calibration.threshold_on, calibration.threshold_off) == (0.3, 0.3)
+    assert calibration.threshold_on_sd == 0.15 and not calibration.response_linear
+    assert "gaps in the stream" in calibration.assumed["thresholds"]
+
+
+def test_a_latency_at_the_end_of_its_profile_is_assumed_not_measured(recording):
+    full, _, _ = recording
+    late = dataclasses.replace(full, times_us=full.times_us + 20_000)  # beyond the 12 ms tried
+    calibration = calibrate_frames(late)
+    assert calibration.latency_us == 0
+    assert "its last value, 12 ms" in calibration.assumed["latency_us"]
+    assert max(LATENCIES_US) == 12_000
+
+
+def test_a_response_straight_only_below_zero_is_not_called_linear():
+    from davis_io.calibration.estimate import _reviewed_response
+    from davis_io.calibration.response_fit import FrameLevels, InverseResponse
+
+    # The curve of an unknown camera: ln g = 0.32 ln(v + 0.1), straight in ln(v - black) only
+    # for black = -0.1, which no frame can have.
+    knots = np.linspace(0.1, 0.9, 12)
+    response = InverseResponse(knots, 0.32 * (np.log(knots + 0.1) - np.log(0.2)))
+    found = type("Found", (), {"response": response})()
+    notes = Assumptions(lambda line: None)
+    levels = FrameLevels(black_level=0.0, saturation=1.0, low=0.06, high=0.98)
+    black, saturation, linear = _reviewed_response(found, levels, notes, lambda line: None)
+    assert not linear and black == 0.0 and saturation == 1.0
+    assert "below any black level a frame can have" in notes.reasons["response"]
+
+
+def test_a_flat_profile_locates_nothing():
+    assert flat_profile(np.array([0.4085, 0.4101, 0.4120]))  # under 1 % apart
+    assert not flat_profile(np.array([0.66, 0.60, 0.59, 0.77]))
+    assert flat_profile(np.array([np.inf, 0.5]))  # one finite value: nothing to compare
+
+
+def test_an_estimate_off_the_physical_range_is_replaced_and_said(capsys):
+    lines = []
+    notes = Assumptions(lines.append)
+    from davis_io.calibration.plausible import DEAD_TIME_US
+
+    assert not notes.check("dead_time_us", 50_000, DEAD_TIME_US, "no dead time (0)")
+    assert "dead_time_us" in notes
+    assert lines == [
+        "dead_time_us not measured (50000 is outside what a DAVIS can have (a whole number "
+        "from 0 to 20000 µs)): no dead time (0)"
+    ]
