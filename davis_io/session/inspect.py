@@ -65,12 +65,17 @@ def session_report(path: Path | str, *, frames: bool, repair: bool, as_json: boo
         session.check_coordinates()
         summary = _summary(session)
         table = _frame_rows(session) if frames else None
+        calibration = session.calibration()
     if as_json:
         document = {"session": summary, **({"frames": table} if table is not None else {})}
         return "\n".join([*lines, json.dumps(document, indent=2)])
     for key, value in summary.items():
         if key == "source_notes":
             lines.extend(f"{'source note':28s} {note}" for note in _shown_notes(value))
+        elif key == "calibration" and calibration is not None:
+            # Which values were measured and which assumed (and why), one per line.
+            shown = calibration.summary().split("\nmethod: ")[0].splitlines()
+            lines.extend(f"{key if i == 0 else '':28s} {line}" for i, line in enumerate(shown))
         else:
             lines.append(f"{key:28s} {value}")
     if table is not None:

@@ -251,3 +251,46 @@ def test_linear_levels_that_cannot_hold_the_anchor_fall_back_to_a_learned_respon
     assert isinstance(crf, RgbCrf)
     scene.linear_levels = (0.05, 0.9)
     assert isinstance(rgb_response(RgbCrf, scene, FitConfig()), LinearCrf)
+
+
+def test_a_learned_threshold_scale_divides_the_counts_and_pays_its_prior():
+    spec = EventModelSpec(delay="none")
+    crf = EventCrf(spec, threshold=0.3, scale_sd=0.5)
+    log_e = torch.tensor([[[0.0] * 3, [0.6] * 3, [0.3] * 3]])  # +0.6 then -0.3 ln
+    mix = torch.tensor([[0.0, 1.0, 0.0]])
+    assert crf(log_e, mix, torch.ones(1))[0].tolist() == pytest.approx([2.0, -1.0])
+    with torch.no_grad():
+        crf.log_scale.fill_(math.log(1.5))  # thresholds 1.5x: 0.45, a third fewer events
+    assert crf(log_e, mix, torch.ones(1))[0].tolist() == pytest.approx([4 / 3, -2 / 3])
+    assert crf.threshold_scale == pytest.approx(1.5)
+    # ln 1.5 = 0.405 at a standard deviation of 0.5: (0.405 / 0.5)^2 = 0.657.
+    assert float(crf.scale_prior().detach()) == pytest.approx((math.log(1.5) / 0.5) ** 2)
+    # Recorded counts twice the predicted ones pull the scale down (a smaller threshold).
+    crf.log_scale.data.zero_()
+    loss = (crf(log_e, mix, torch.ones(1)) - torch.tensor([[4.0, -2.0]])).square().sum()
+    loss.backward()
+    assert float(crf.log_scale.grad) > 0
+    fixed = EventCrf(spec, threshold=0.3)
+    assert not fixed.log_scale.requires_grad and float(fixed.scale_prior()) == 0
+
+
+@pytest.mark.parametrize(
+    ("setting", "stated", "uncertainty", "expected"),
+    [
+        ("auto", 0.0, 0.5, 0.5),  # assumed thresholds: learned under their wide prior
+        ("auto", 0.0, 0.16, 0.16),  # weakly measured: learned
+        ("auto", 0.0, 0.03, 0.0),  # well measured: kept
+        ("fixed", 0.0, 0.5, 0.0),
+        ("learned", 0.0, 0.03, 0.1),  # at least the threshold of learning
+        ("auto", 0.25, 0.5, 0.0),  # a stated threshold is kept
+    ],
+)
+def test_when_the_threshold_scale_is_learned(setting, stated, uncertainty, expected):
+    from seenerf.data.synthetic import plane_scene
+    from seenerf.model.config import FitConfig
+    from seenerf.train.builder import threshold_scale_sd
+
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
+    scene.threshold_sd = uncertainty
+    config = FitConfig(threshold_scale=setting, threshold=stated)
+    assert threshold_scale_sd(scene, config) == pytest.approx(expected)

@@ -49,15 +49,51 @@ CONTRAST_FRAMES = 3
 
 @dataclass(frozen=True)
 class BlindSpec:
-    """A blind session: a scene and the seed its sensor (and shake) is drawn from."""
+    """A blind session: a scene, the seed its sensor (and shake) is drawn from, how it records.
+
+    Attributes:
+        scene: built-in scene.
+        seed: draws the sensor and the shake.
+        exposure_s: every frame's exposure.
+        frame_interval_s: time between frame starts (0: the exposure plus 50 ms).
+        event_window_ms: events kept only this near an exposure (0: every event).
+        still_frames: frames mid-recording with the camera held still.
+    """
 
     scene: str
     seed: int
+    exposure_s: float = EXPOSURE_S
+    frame_interval_s: float = 0.0
+    event_window_ms: float = 0.0
+    still_frames: int = 0
 
     @property
     def key(self) -> str:
         """Folder and row name."""
         return f"{self.scene}-s{self.seed}"
+
+    def record_options(self) -> list[str]:
+        """The ``seecap record`` options beyond scene, sensor and seed."""
+        options = ["--exposure", f"{self.exposure_s:g}"]
+        if self.frame_interval_s:
+            options += ["--frame-interval", f"{self.frame_interval_s:g}"]
+        if self.event_window_ms:
+            options += ["--event-window", f"{self.event_window_ms:g}ms"]
+        if self.still_frames:
+            options += ["--still-frames", str(self.still_frames)]
+        return options
+
+    def describe(self) -> str:
+        """How the session was recorded, in words (empty for the default way)."""
+        parts = []
+        if self.exposure_s != EXPOSURE_S or self.frame_interval_s:
+            interval = self.frame_interval_s or self.exposure_s + 0.05
+            parts.append(f"{self.exposure_s * 1000:g} ms every {interval * 1000:g} ms")
+        if self.event_window_ms:
+            parts.append(f"events only ±{self.event_window_ms:g} ms around exposures")
+        if self.still_frames:
+            parts.append(f"{self.still_frames} frames held still")
+        return "; ".join(parts)
 
 
 BLIND_SESSIONS = (
@@ -67,10 +103,18 @@ BLIND_SESSIONS = (
     BlindSpec("lamp", 9),
     BlindSpec("corridor", 0),
     BlindSpec("corridor", 16),
+    BlindSpec("room", 101, 0.05, 0.2, event_window_ms=3),
+    BlindSpec("lamp", 102, 0.02, 0.2),
+    BlindSpec("corridor", 103, still_frames=4),
+    BlindSpec("room", 104, 0.05, 0.2, event_window_ms=3),
 )
-"""Six sessions over the three scenes: three monochrome (room-s22, lamp-s5, lamp-s9), three
+"""Ten sessions over the three scenes. The first six record as the emulator does by default
+(150 ms exposures, continuous events): three monochrome (room-s22, lamp-s5, lamp-s9), three
 whose pixels have no refractory period and a fast cut-off (room-s10, room-s22, corridor-s16,
-where the threshold target applies), the four response families among them."""
+where the threshold target applies), the four response families among them. The other four
+record as users do, seeds 101-104 taken in order before any was fitted: view by view (events
+only within 3 ms of each 50 ms exposure, a frame every 200 ms; room-s101 mono, room-s104 RGGB),
+20 ms exposures every 200 ms (lamp-s102, RGGB) and four frames held still (corridor-s103)."""
 
 
 @dataclass
@@ -212,8 +256,7 @@ def run_blind_session(
                 "random",
                 "--seed",
                 str(spec.seed),
-                "--exposure",
-                str(EXPOSURE_S),
+                *spec.record_options(),
                 "--out",
                 str(session_dir),
                 "--overwrite",
