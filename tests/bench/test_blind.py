@@ -37,24 +37,36 @@ def test_targets_of_a_session_that_meets_them_and_of_one_that_misses():
     row = BlindRow(
         "room-s1",
         sensor=SENSOR,
-        calibration={"threshold_on": 0.32, "threshold_off": 0.37, "latency_us": 1400},
+        calibration={
+            "threshold_on": 0.32,
+            "threshold_off": 0.37,
+            "threshold_on_sd": 0.011,  # 0.02 off: within 2 sigma
+            "threshold_off_sd": 0.02,  # 0.03 off: within 2 sigma
+            "latency_us": 1400,
+        },
         scores={
             "full": scores(30.0, 28.0, 0.95),
             "white-box": scores(30.8, 28.9),  # 0.8 and 0.9 dB better: within 1 dB
             "oracle": scores(32.9, 31.0),  # 2.9 and 3.0 dB: within 3 dB
         },
+        poses={"rotation_median_deg": 0.31, "rotation_max_deg": 0.9, "registered": 1.0},
     )
     on, off = row.threshold_errors()
     assert math.isclose(on, 0.32 / 0.30 - 1) and math.isclose(off, 0.37 / 0.40 - 1)
     assert row.clean_pixel
     assert all(blind_targets(row).values())
-    row.scores["full"] = scores(29.5, 28.0, 0.85)
-    row.calibration["threshold_off"] = 0.35  # 12.5 % low
+    row.scores["full"] = scores(29.5, 28.0, 0.75)
+    row.calibration["threshold_off"] = 0.35  # 12.5 % low, 2.5 sigma
+    row.calibration["latency_us"] = 12_000  # the profile's last value
+    row.poses["rotation_median_deg"] = 0.6
     missed = [name for name, met in blind_targets(row).items() if met is False]
     assert missed == [
-        "log contrast 0.9-1.1",
+        "log contrast 0.8-1.2",
         "white-box − full ≤ 1 dB (hdr)",
         "oracle − full ≤ 3 dB (hdr)",
+        "poses ≤ 0.5° median",
+        "no stored value at a search bound",
+        "truth within 2 stated σ",
         "thresholds within 10 % (clean pixels)",
     ]
 
@@ -64,22 +76,36 @@ def test_a_lagging_pixel_is_not_held_to_the_threshold_target_and_missing_runs_ar
     row = BlindRow("lamp-s2", sensor=lagging, scores={"full": scores(30.0, 28.0)})
     targets = blind_targets(row)
     assert targets["thresholds within 10 % (clean pixels)"] is None
-    assert targets["white-box − full ≤ 1 dB (hdr)"] is None and targets["log contrast 0.9-1.1"]
+    assert targets["white-box − full ≤ 1 dB (hdr)"] is None and targets["log contrast 0.8-1.2"]
+    assert targets["poses ≤ 0.5° median"] is None and targets["truth within 2 stated σ"] is None
     table = blind_rows_markdown([row])
     assert "lamp-s2" in table and "30.00" in table and "mono, linear" in table
     # The bracket is listed shortest exposure first, whatever the order of the keys.
     assert "| lamp-s2 | full | 31.00 | 30.00 | 29.00 | 26.00 | 24.00 |" in table
     # The events' share of the contrast is not measured for this row; with it, both readings.
-    assert "| lamp-s2 | mono, linear" in table and "| - |" in table
+    assert "| lamp-s2 | default | mono, linear" in table and "| - |" in table
     row.event_contrast = {"measured": 0.634, "true": 0.886}
     assert "| 0.63 / 0.89 |" in blind_rows_markdown([row])
 
 
-def test_the_plan_has_six_sessions_over_three_scenes_two_of_them_mono_at_least():
+def test_the_plan_has_ten_sessions_four_recorded_as_users_do():
     from davis_io.emulator import draw_sensor
     from davis_io.types import ColorFilter
 
-    assert len(BLIND_SESSIONS) >= 6
+    assert len(BLIND_SESSIONS) >= 10
+    other = [spec for spec in BLIND_SESSIONS if spec.describe()]
+    assert len(other) >= 4
+    assert any(spec.event_window_ms for spec in other)  # events only around exposures
+    assert any(0.02 <= spec.exposure_s <= 0.05 and spec.frame_interval_s == 0.2 for spec in other)
+    assert any(draw_sensor(spec.seed).color_filter is not ColorFilter.MONO for spec in other)
+    assert BLIND_SESSIONS[6].record_options() == [
+        "--exposure",
+        "0.05",
+        "--frame-interval",
+        "0.2",
+        "--event-window",
+        "3ms",
+    ]
     assert {spec.scene for spec in BLIND_SESSIONS} == {"room", "lamp", "corridor"}
     assert len({spec.key for spec in BLIND_SESSIONS}) == len(BLIND_SESSIONS)
     sensors = [draw_sensor(spec.seed) for spec in BLIND_SESSIONS]
