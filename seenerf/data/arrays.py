@@ -97,8 +97,6 @@ class TrainingData:
         channel: ``(H, W)`` int64 response-curve channel of each pixel.
         monochrome: the sensor has no colour filter: renders are luminance, one channel.
         threshold: the unit of ``bins``: the mean of the calibrated ON and OFF thresholds.
-        threshold_sd: its relative standard uncertainty (0.5 for the nominal one a calibration
-            had to assume; 0 for a stated or true one).
         cutoff_hz: the photoreceptor cut-off the calibration knows, or 0 (the config's then).
         dead_time_s: the pixels' measured dead time, or 0 when none was measured.
         polarity_scale: the calibrated ON and OFF thresholds over ``threshold``.
@@ -123,7 +121,6 @@ class TrainingData:
     settled: np.ndarray | None = None
     monochrome: bool = False
     threshold: float = 0.3
-    threshold_sd: float = 0.0
     cutoff_hz: float = 0.0
     dead_time_s: float = 0.0
     polarity_scale: tuple[float, float] = (1.0, 1.0)

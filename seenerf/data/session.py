@@ -33,14 +33,6 @@ def _calibration(session: Session, sensor_from_truth: bool, threshold: float) ->
     return calibration.with_threshold(threshold) if threshold > 0 else calibration
 
 
-def _relative_sd(calibration: SensorCalibration) -> float:
-    """The thresholds' relative standard uncertainty, the mean of ON's and OFF's."""
-    return 0.5 * (
-        calibration.threshold_on_sd / calibration.threshold_on
-        + calibration.threshold_off_sd / calibration.threshold_off
-    )
-
-
 def _poses_at(poses: SessionPoses, stored_times: np.ndarray, times: np.ndarray) -> np.ndarray:
     """The poses at other latent time points (the calibration's event latency moves them)."""
     known_times = (poses.time_us if poses.time_us is not None else stored_times).reshape(-1)
@@ -110,7 +102,6 @@ def load_training_data(
             settled=bins.settled[usable],
             monochrome=not session.color_filter.is_color,
             threshold=calibration.threshold,
-            threshold_sd=_relative_sd(calibration),
             cutoff_hz=calibration.cutoff_hz,
             dead_time_s=calibration.dead_time_us * 1e-6,
             polarity_scale=(

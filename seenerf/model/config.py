@@ -44,7 +44,6 @@ _EXPOSURE = Bounds(1e-6, 30 * 86_400.0, "s")
 
 _CHOICES: dict[str, tuple[str, ...]] = {
     "response": ("auto", "learned"),
-    "threshold_scale": ("auto", "fixed", "learned"),
     "device": ("auto", "cpu", "cuda"),
 }
 
@@ -76,10 +75,6 @@ class FitConfig:
         threshold: DVS contrast threshold Theta in log units for ON, OFF and every pixel,
             overriding the ones measured from the recording (0: measured; the events alone set
             the field's log contrast).
-        threshold_scale: ``auto`` learns one common scale of the thresholds with the field when
-            the calibration could not measure them well (assumed, or uncertain by more than
-            10 %), under a prior of their stated uncertainty; ``fixed`` never, ``learned``
-            always.
         cutoff_hz: photoreceptor cut-off frequency of the delay filter, unless the sensor's
             values state it.
         dead_time: use the pixels' measured dead time (refractory period): predicted events
@@ -119,7 +114,6 @@ class FitConfig:
     anchor_value: float = 0.5
     response: str = "auto"
     threshold: float = 0.0
-    threshold_scale: str = "auto"
     cutoff_hz: float = 150.0
     dead_time: bool = True
     frame_noise: bool = True
@@ -178,7 +172,6 @@ class FitConfig:
             "anchor_value",
             "response",
             "threshold",
-            "threshold_scale",
             "cutoff_hz",
             "dead_time",
             "frame_noise",

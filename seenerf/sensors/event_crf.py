@@ -70,7 +70,7 @@ def low_pass(signal: torch.Tensor, epsilon: torch.Tensor, order: int = 1) -> tor
     return signal
 
 
-def predicted_counts(filtered_log: torch.Tensor, threshold: float | torch.Tensor) -> torch.Tensor:
+def predicted_counts(filtered_log: torch.Tensor, threshold: float) -> torch.Tensor:
     """Continuous event counts per bin ``(L_(k+1) - L_k) / threshold``, shape ``(R, P-1)``."""
     return torch.diff(filtered_log, dim=1) / threshold
 
@@ -133,10 +133,6 @@ class EventCrf(nn.Module):
         dead_time_s: a pixel's shortest interval between events; 0: no limit to its rate.
         polarity_scale: the ON and OFF thresholds over ``threshold`` (a step holds at most
             ``step / dead_time`` events, each of its polarity's threshold).
-        scale_sd: 0 keeps ``threshold`` as given; above 0, one common scale of the thresholds is
-            learned with the field (ln scale under a normal prior of this standard deviation,
-            :meth:`scale_prior`): the blur of the frames, which the field must explain
-            together with the events, tells it where the calibration could not.
     """
 
     def __init__(
@@ -147,13 +143,10 @@ class EventCrf(nn.Module):
         hidden: int = 128,
         dead_time_s: float = 0.0,
         polarity_scale: tuple[float, float] = (1.0, 1.0),
-        scale_sd: float = 0.0,
     ):
         super().__init__()
         self.spec = spec
         self.threshold = threshold
-        self.scale_sd = scale_sd
-        self.log_scale = nn.Parameter(torch.zeros(()), requires_grad=scale_sd > 0)
         self.dead_time_s = dead_time_s
         self.polarity_scale = polarity_scale
         self.tau_s = 1.0 / (2 * math.pi * cutoff_hz)
@@ -161,17 +154,6 @@ class EventCrf(nn.Module):
             nn.Linear(1, hidden), nn.ReLU(), nn.Linear(hidden, 1), nn.Sigmoid()
         )
         self.mix_logits = nn.Parameter(torch.zeros(3))
-
-    @property
-    def threshold_scale(self) -> float:
-        """The common scale of the thresholds learned so far (1 when it is not learned)."""
-        return float(torch.exp(self.log_scale.detach()))
-
-    def scale_prior(self) -> torch.Tensor:
-        """``(ln scale / scale_sd)^2``: the learned scale's prior (0 when it is not learned)."""
-        if self.scale_sd <= 0:
-            return torch.zeros((), device=self.log_scale.device)
-        return (self.log_scale / self.scale_sd).square()
 
     def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
         """Warm the delay MLP like the RGB CRF (towards clip(softplus(x), 0, 1))."""
@@ -204,8 +186,7 @@ class EventCrf(nn.Module):
         """
         pixel = self.pixel_log_radiance(log_radiance, mix)
         step_s = (exposure_s / max(pixel.shape[1] - 1, 1))[:, None]
-        threshold = self.threshold * torch.exp(self.log_scale)
-        counts = predicted_counts(self.filtered(pixel, exposure_s, step_s), threshold)
+        counts = predicted_counts(self.filtered(pixel, exposure_s, step_s), self.threshold)
         if self.dead_time_s > 0:
             most = step_s[:, 0] / self.dead_time_s
             counts = rate_limited(

@@ -75,20 +75,6 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
     return crf(**anchor)
 
 
-LEARN_SCALE_ABOVE = 0.1
-"""Thresholds measured less precisely than this (relative standard uncertainty) get their
-common scale learned with the field under ``--threshold-scale auto``."""
-
-
-def threshold_scale_sd(data: TrainingData, config: FitConfig) -> float:
-    """The prior's standard deviation of the thresholds' learned ln scale (0: not learned)."""
-    if config.threshold_scale == "fixed" or config.threshold > 0:
-        return 0.0
-    if config.threshold_scale == "learned":
-        return max(data.threshold_sd, LEARN_SCALE_ABOVE)
-    return data.threshold_sd if data.threshold_sd > LEARN_SCALE_ABOVE else 0.0
-
-
 def training_frame(data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
     """Poses the field is trained at and the scene's near / far depth in their frame.
 
@@ -167,7 +153,6 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
             "cutoff_hz": data.cutoff_hz or config.cutoff_hz,
             "dead_time_s": data.dead_time_s if config.dead_time else 0.0,
             "polarity_scale": data.polarity_scale,
-            "scale_sd": threshold_scale_sd(data, config),
         },
     )
     return model.to(device), preset

@@ -136,9 +136,6 @@ def resolved_settings(trainer: Trainer) -> dict:
         "space": "ndc" if renderer.space is not None else "world",
         "event_weight": trainer.preset.event_weight,
         "event_threshold": trainer.data.threshold,
-        "event_threshold_scale_sd": trainer.model.event_crf.scale_sd
-        if trainer.model.event_crf is not None
-        else 0.0,
         "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.cutoff_hz,
         "event_dead_time_s": trainer.model.event_crf.dead_time_s
         if trainer.model.event_crf is not None
@@ -181,11 +178,6 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         f"image motion between latent poses: median {travel_px:.1f} px at the mean depth; "
         f"{config.subframes} pose(s) per bin in the blur integral"
     )
-    if trainer.model.event_crf is not None and trainer.model.event_crf.scale_sd > 0:
-        log(
-            f"the thresholds are uncertain by {100 * data.threshold_sd:.0f} %: their common "
-            "scale is learned with the field (--threshold-scale fixed keeps them)"
-        )
     if isinstance(trainer.model.crf, LinearCrf):
         crf = trainer.model.crf
         log(
@@ -203,14 +195,6 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
             f"warning: {summary.skipped_steps} of {summary.steps} steps were skipped: their loss "
             "was not finite"
         )
-    event_crf = trainer.model.event_crf
-    if event_crf is not None and event_crf.scale_sd > 0:
-        scale = event_crf.threshold_scale
-        log(
-            f"thresholds' common scale learned with the field: x{scale:.3f} (ON "
-            f"{data.threshold * data.polarity_scale[0] * scale:.3f}, OFF "
-            f"{data.threshold * data.polarity_scale[1] * scale:.3f})"
-        )
     training_curves(run_dir / "training.png", summary.history)
     metrics = render_outputs(trainer.model, data, config, run_dir)
     metrics["training"] = {
@@ -224,9 +208,6 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         "history": summary.history,
         "seconds_before_training": spent_s,
         "latent_travel_px": travel_px,
-        "threshold_scale": trainer.model.event_crf.threshold_scale
-        if trainer.model.event_crf is not None
-        else 1.0,
     }
     write_json(run_dir / "metrics.json", metrics)
     return FitResult(run_dir, summary, metrics)

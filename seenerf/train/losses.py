@@ -30,13 +30,11 @@ class LossWeights:
         events: lambda of eq. 15 (0.005).
         anchor: weight of the CRF anchor term (0.5).
         smoothness: weight of the field's total-variation term.
-        threshold_prior: weight of the learned threshold scale's prior, ``(ln s / sd)^2``.
     """
 
     events: float = 0.005
     anchor: float = 0.5
     smoothness: float = 0.0
-    threshold_prior: float = 0.0
 
 
 def ldr_loss(predicted: torch.Tensor, recorded: torch.Tensor) -> torch.Tensor:
@@ -112,16 +110,6 @@ def total_loss(
     anchor: torch.Tensor,
     smoothness: torch.Tensor,
     weights: LossWeights,
-    threshold_prior: torch.Tensor | float = 0.0,
 ) -> torch.Tensor:
-    """``L_ldr + lambda L_evs + w_anchor L_anchor + w_tv L_tv`` (eq. 15 + the reference anchor).
-
-    Plus the learned threshold scale's prior, where there is one.
-    """
-    return (
-        ldr
-        + weights.events * events
-        + weights.anchor * anchor
-        + weights.smoothness * smoothness
-        + weights.threshold_prior * threshold_prior
-    )
+    """``L_ldr + lambda L_evs + w_anchor L_anchor + w_tv L_tv`` (eq. 15 + the reference anchor)."""
+    return ldr + weights.events * events + weights.anchor * anchor + weights.smoothness * smoothness

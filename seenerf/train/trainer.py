@@ -40,11 +40,6 @@ CHECKPOINT_EVERY_S = 60.0
 """Seconds of training between checkpoints besides those at every evaluation: a killed fit
 loses at most this much."""
 
-THRESHOLD_PRIOR_SHARE = 0.01
-"""The learned threshold scale's prior weighs this share of the event loss's weight: at one
-standard deviation it costs what a hundredth of an event squared per pixel does, so the data
-moves it wherever they speak, and it stays put where they do not."""
-
 SKIPPED_IN_A_ROW_LIMIT = 50
 """Steps in a row without a finite loss after which a fit stops as failed: nothing is learned."""
 
@@ -148,10 +143,7 @@ class Trainer:
         self.total_steps = config.steps or (math.inf if budgeted else self.preset.steps)
         self.spent_s = spent_s
         self.weights = LossWeights(
-            self.preset.event_weight,
-            config.anchor_weight,
-            self.preset.smoothness,
-            THRESHOLD_PRIOR_SHARE * self.preset.event_weight,
+            self.preset.event_weight, config.anchor_weight, self.preset.smoothness
         )
         self.frame_scale = frame_scale(data, config)
         self._make_samplers()
@@ -325,8 +317,7 @@ class Trainer:
             zero,
         )
         anchor = model.crf.anchor_loss() if model.crf is not None else zero
-        prior = model.event_crf.scale_prior() if model.event_crf is not None else zero
-        loss = total_loss(ldr, events, anchor, smooth, self.weights, prior)
+        loss = total_loss(ldr, events, anchor, smooth, self.weights)
         rays = batch.origins.shape[0] * batch.origins.shape[1]
         terms = {
             "ldr": float(ldr.detach()),
