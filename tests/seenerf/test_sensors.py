@@ -251,4 +251,3 @@ def test_linear_levels_that_cannot_hold_the_anchor_fall_back_to_a_learned_respon
     assert isinstance(crf, RgbCrf)
     scene.linear_levels = (0.05, 0.9)
     assert isinstance(rgb_response(RgbCrf, scene, FitConfig()), LinearCrf)
-
