@@ -73,15 +73,15 @@ def calibrate_session(
 def session_calibration(session: Session, progress: Progress | None = None) -> SensorCalibration:
     """The stored calibration, measured first when there is none.
 
-    A recording that cannot be measured (too few usable frames or pixels) gets the nominal
-    sensor (:data:`~davis_io.session.DEFAULT_THRESHOLD`), stored with the reason, and a warning
-    through ``progress``.
+    A recording that cannot be measured (fewer than two frames) gets the nominal sensor
+    (:data:`~davis_io.session.DEFAULT_THRESHOLD`), stored with the reason; one whose values
+    were measured only in part says which were assumed. Both warn through ``progress``.
     """
     stored = session.calibration()
     if stored is not None:
         return stored
     try:
-        return calibrate_session(session, progress=progress)
+        calibration = calibrate_session(session, progress=progress)
     except UsageError as error:
         fallback = default_calibration(DEFAULT_THRESHOLD, f"not measured: {error}")
         (progress or warnings.warn)(
@@ -90,3 +90,9 @@ def session_calibration(session: Session, progress: Progress | None = None) -> S
         )
         session.write_calibration(fallback)
         return fallback
+    if calibration.assumed:
+        (progress or warnings.warn)(
+            f"the sensor could not be measured in full: assumed {', '.join(calibration.assumed)} "
+            f"(`seecap inspect {session.folder}` says why and what stands in for each)"
+        )
+    return calibration
