@@ -119,7 +119,7 @@ def test_hostile_command_lines_end_in_one_line_and_a_documented_status(verb, not
 
     @settings(
         # doctor runs its checks (about a second) on every example; its one option is --path
-        max_examples=min(EXAMPLES, 10) if verb == "doctor" else EXAMPLES,
+        max_examples=min(EXAMPLES, 3) if verb == "doctor" else EXAMPLES,
         deadline=None,
         derandomize=True,
         suppress_health_check=[HealthCheck.function_scoped_fixture],
