@@ -40,6 +40,14 @@ CHECKPOINT_EVERY_S = 60.0
 """Seconds of training between checkpoints besides those at every evaluation: a killed fit
 loses at most this much."""
 
+OUTPUT_RENDERS_PER_VIEW = 6.0
+"""A held-out view's share of the work after training, in renders of it: rendered, registered
+against its image (about four renders' worth: 1.5 s against 0.4 s per view on 2 cores) and
+rendered again."""
+
+OUTPUT_FIXED_S = 8.0
+"""Scores, plots and the last checkpoint after training, seconds."""
+
 SKIPPED_IN_A_ROW_LIMIT = 50
 """Steps in a row without a finite loss after which a fit stops as failed: nothing is learned."""
 
@@ -162,6 +170,8 @@ class Trainer:
         self.summary = TrainSummary()
         self.evals_since_best = 0
         self.last_step_skipped = False
+        self.outputs_s = 0.0
+        """Seconds kept from the budget for the renders and scores after training."""
 
     def _make_samplers(self) -> None:
         data, rng = self.data, np.random.default_rng(self.config.seed)
@@ -255,10 +265,35 @@ class Trainer:
         )
 
     def _training_budget(self) -> float:
-        """Training seconds the budget leaves after the caller's (poses); inf without one."""
+        """Training seconds the budget leaves; inf without a budget.
+
+        What the caller spent (calibration, poses) and what the final renders and scores will
+        take (:attr:`outputs_s`) are not the training's.
+        """
         if self.config.time_budget_s <= 0:
             return math.inf
-        return self.config.time_budget_s - self.spent_s
+        return self.config.time_budget_s - self.spent_s - self.outputs_s
+
+    def _estimate_outputs(self, validation_s: float) -> None:
+        """What the renders and scores after training will take, from the validation's speed.
+
+        Each held-out view is rendered, registered against its image and rendered again
+        (:data:`OUTPUT_RENDERS_PER_VIEW` renders' worth), plus :data:`OUTPUT_FIXED_S`.
+        """
+        rays = len(self.validation) * (self.data.num_bins * self.config.subframes + 1)
+        if rays == 0 or validation_s <= 0:
+            return
+        height, width = self.data.image_size
+        views = len(self.data.test.c2w) if self.data.test is not None else self.data.num_frames
+        render_s = height * width * validation_s / rays
+        first = self.outputs_s == 0.0
+        self.outputs_s = views * OUTPUT_RENDERS_PER_VIEW * render_s + OUTPUT_FIXED_S
+        if first and self.config.time_budget_s > 0:
+            self.log(
+                f"keeping {self.outputs_s:.0f} s of the {self.config.time_budget_s:.0f} s budget "
+                f"for the final renders and scores of {views} views ({self.spent_s:.0f} s went "
+                "to calibration and poses)"
+            )
 
     def training_progress(self) -> TrainingProgress:
         """Steps and seconds done against the run's step count and time budget."""
@@ -393,7 +428,9 @@ class Trainer:
         )
 
     def _evaluate(self, start_step: int, start: float) -> bool:
+        began = time.perf_counter()
         value = self.validation_psnr()
+        self._estimate_outputs(time.perf_counter() - began)
         rate = (self.summary.steps - start_step) / max(time.perf_counter() - start, 1e-9)
         remaining = (self.total_steps - self.summary.steps) / max(rate, 1e-9)
         eta = min(remaining, self._budget_left())

@@ -356,3 +356,26 @@ def test_a_full_disk_keeps_the_previous_checkpoint(tiny_scene, tmp_path, monkeyp
     monkeypatch.undo()
     resumed = Trainer(tiny_scene, _config(steps=3), tmp_path, log=lambda line: None)
     assert resumed.train().steps == 3  # resumed from step 2, one more step
+
+
+def test_the_budget_keeps_room_for_the_renders_and_scores_after_training(tiny_scene):
+    from seenerf.train.trainer import OUTPUT_FIXED_S, OUTPUT_RENDERS_PER_VIEW
+
+    lines = []
+    trainer = Trainer(
+        tiny_scene,
+        _config(steps=0, time_budget_s=100.0, validation_share=0.2),
+        log=lines.append,
+        spent_s=60.0,
+    )
+    assert trainer._training_budget() == 40.0  # nothing kept before the first validation
+    height, width = tiny_scene.image_size
+    rays = len(trainer.validation) * (tiny_scene.num_bins + 1)
+    trainer._estimate_outputs(validation_s=0.5)
+    # A view's rays at the validation's speed, six renders' worth per held-out view.
+    per_view = height * width * 0.5 / rays
+    views = len(tiny_scene.test.c2w)
+    expected = views * OUTPUT_RENDERS_PER_VIEW * per_view + OUTPUT_FIXED_S
+    assert trainer.outputs_s == pytest.approx(expected)
+    assert trainer._training_budget() == pytest.approx(40.0 - expected)
+    assert any("for the final renders and scores" in line for line in lines)
