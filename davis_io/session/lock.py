@@ -3,9 +3,12 @@
 A writer holds ``fcntl.flock`` on ``<folder>/.writer.lock`` for as long as it writes and keeps
 its process id, what it does and its start time in the file. A second writer gets a
 :class:`SessionBusy` error naming the holder; a lock left by a killed process is free again
-(the kernel dropped it with the process), so it is simply taken. Locks are re-entrant within a
-process. The lock file is opened without following a symbolic link and must be a regular file
-of the user's own, so that nobody can make a writer truncate another file through it.
+(the kernel dropped it with the process), so it is simply taken. Fits share the lock of their
+session (each writes only its own run folder, under that folder's exclusive lock), and so keep
+out anything that rewrites the recording (``record --overwrite``, a repair, a calibration).
+Locks are re-entrant within a process. The lock file is opened without following a symbolic
+link and must be a regular file of the user's own, so that nobody can make a writer truncate
+another file through it.
 """
 
 from __future__ import annotations
@@ -18,7 +21,9 @@ import stat
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TextIO
 
 from davis_io.errors import SessionError
 
@@ -26,68 +31,110 @@ __all__ = ["LOCK_NAME", "SessionBusy", "writer_lock"]
 
 LOCK_NAME = ".writer.lock"
 
-_held: dict[Path, int] = {}
-"""Folders this process holds, and how deep."""
+
+@dataclass
+class _Hold:
+    """A lock this process holds: its open file, how deep, and whether it is exclusive."""
+
+    handle: TextIO
+    depth: int
+    exclusive: bool
+
+
+_held: dict[Path, _Hold] = {}
+"""Folders this process holds."""
 
 
 class SessionBusy(SessionError):
     """Another process is writing the same session (or run) folder."""
 
 
-def _holder(path: Path) -> str:
+def _holders(path: Path) -> str:
+    """Who holds the lock, from the facts each holder wrote (dead processes left out)."""
     try:
-        facts = json.loads(path.read_text())
-        return (
-            f"process {facts['pid']} ({facts['command']}, since "
-            f"{time.strftime('%H:%M:%S', time.localtime(facts['started']))})"
-        )
-    except (OSError, ValueError, KeyError):
+        lines = path.read_text().splitlines()
+    except OSError:
         return "another process"
+    found = []
+    for line in lines:
+        try:
+            facts = json.loads(line)
+            os.kill(int(facts["pid"]), 0)  # still running?
+        except (ValueError, KeyError, TypeError, ProcessLookupError, PermissionError):
+            continue
+        since = time.strftime("%H:%M:%S", time.localtime(facts["started"]))
+        found.append(f"process {facts['pid']} ({facts['command']}, since {since})")
+    return ", ".join(found) or "another process"
 
 
 @contextmanager
-def writer_lock(folder: Path | str, purpose: str) -> Iterator[None]:
+def writer_lock(folder: Path | str, purpose: str, *, shared: bool = False) -> Iterator[None]:
     """Hold the writer lock of ``folder`` (created if missing) while inside.
 
     Args:
         folder: a session folder, or a run folder inside it.
         purpose: what this writer does, for the message another writer gets.
+        shared: share the lock with other shared holders (fits that read the recording and
+            write only their own run folder): they exclude every exclusive writer, not each
+            other.
 
     Raises:
         SessionBusy: another process holds it (the message names it and what to do).
         SessionError: the lock file is a symbolic link, not a plain file, or another user's.
     """
     folder = Path(folder).resolve()
-    if _held.get(folder):
-        _held[folder] += 1
-        try:
+    hold = _held.get(folder)
+    if hold is not None:
+        with _nested(folder, hold, shared):
             yield
-        finally:
-            _held[folder] -= 1
         return
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / LOCK_NAME
     handle = _open_lock_file(path)
     try:
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise SessionBusy(
-                f"{folder} is being written by {_holder(path)}; wait for it to finish or stop "
-                "it, then run this again"
-            ) from None
-        handle.seek(0)
-        handle.truncate()
-        facts = {"pid": os.getpid(), "command": purpose, "started": time.time()}
-        handle.write(json.dumps(facts))
+        _take(handle, path, folder, shared)
+        facts = json.dumps({"pid": os.getpid(), "command": purpose, "started": time.time()})
+        if shared:
+            handle.seek(0, os.SEEK_END)
+        else:
+            handle.seek(0)
+            handle.truncate()
+        handle.write(facts + "\n")
         handle.flush()
-        _held[folder] = 1
+        _held[folder] = _Hold(handle, 1, not shared)
         try:
             yield
         finally:
             _held.pop(folder, None)
     finally:
         handle.close()  # closing releases the lock
+
+
+def _take(handle: TextIO, path: Path, folder: Path, shared: bool) -> None:
+    try:
+        fcntl.flock(handle, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
+    except BlockingIOError:
+        raise SessionBusy(
+            f"{folder} is being written by {_holders(path)}; wait for it to finish or stop "
+            "it, then run this again"
+        ) from None
+
+
+@contextmanager
+def _nested(folder: Path, hold: _Hold, shared: bool) -> Iterator[None]:
+    """A lock this process holds already; a shared one is made exclusive while inside."""
+    upgrade = not shared and not hold.exclusive
+    if upgrade:
+        _take(hold.handle, folder / LOCK_NAME, folder, shared=False)
+        hold.exclusive = True
+    hold.depth += 1
+    try:
+        yield
+    finally:
+        hold.depth -= 1
+        if upgrade:
+            fcntl.flock(hold.handle, fcntl.LOCK_SH)
+            hold.exclusive = False
 
 
 def _open_lock_file(path: Path):

@@ -103,15 +103,18 @@ def fit_session(
     session_dir = Path(session_dir)
     start = time.perf_counter()
     variant = get_variant(config.variant)
-    data = load_training_data(
-        session_dir,
-        session_bins(session_dir, config),
-        sensor_from_truth=variant.sensor_from_truth,
-        threshold=config.threshold,
-    )
     run_dir = run_folder(session_dir, config, run_name)
-    spent_s += time.perf_counter() - start
-    return fit_data(data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s, on_step=on_step)
+    with writer_lock(session_dir, f"fitting {run_dir.name}", shared=True):
+        data = load_training_data(
+            session_dir,
+            session_bins(session_dir, config),
+            sensor_from_truth=variant.sensor_from_truth,
+            threshold=config.threshold,
+        )
+        spent_s += time.perf_counter() - start
+        return fit_data(
+            data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s, on_step=on_step
+        )
 
 
 def _logged_to(path: Path, log: Callable[[str], None]) -> Callable[[str], None]:

@@ -40,3 +40,36 @@ def test_a_second_writer_is_refused_by_name_until_the_first_dies(tmp_path):
     started = time.time()
     with writer_lock(tmp_path, "fitting"):
         assert time.time() - started < 5
+
+
+SHARE = (
+    "import sys, time\n"
+    "from davis_io.session import writer_lock\n"
+    "with writer_lock(sys.argv[1], 'fitting fast-full', shared=True):\n"
+    "    print('held', flush=True)\n"
+    "    time.sleep(60)\n"
+)
+
+
+def test_fits_share_a_sessions_lock_and_keep_every_exclusive_writer_out(tmp_path):
+    holder = subprocess.Popen(
+        [sys.executable, "-c", SHARE, str(tmp_path)], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with writer_lock(tmp_path, "fitting fast-base", shared=True):  # a second fit: fine
+            pass
+        with pytest.raises(SessionBusy, match=f"process {holder.pid} \\(fitting fast-full"):
+            with writer_lock(tmp_path, "recording"):
+                pass
+        # Held shared here too, a write of this process's own must wait for the other fit.
+        with writer_lock(tmp_path, "fitting", shared=True):
+            with pytest.raises(SessionBusy):
+                with writer_lock(tmp_path, "adding bins"):
+                    pass
+    finally:
+        holder.kill()
+        holder.wait(timeout=30)
+    with writer_lock(tmp_path, "fitting", shared=True):
+        with writer_lock(tmp_path, "adding bins"):  # alone now: made exclusive, then shared
+            pass
