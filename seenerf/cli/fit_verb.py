@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -37,8 +38,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--config",
         type=Path,
         metavar="CONFIG_JSON",
-        help="fit again with the configuration a run saved (its config.json); the fit options "
-        "below are then ignored",
+        help="fit again with the configuration a run saved (its config.json); fit options "
+        "given beside it replace its values",
     )
     parser.add_argument(
         "--ray",
@@ -66,10 +67,14 @@ def run(args: argparse.Namespace) -> int:
 
     if args.run is not None:
         plain_name(args.run, "--run")
+    values = dataclass_values(FitConfig, args)
     if args.config is not None:
-        config = load_config(args.config)
+        # The saved run's configuration, with the options given beside it on top.
+        defaults = dataclass_values(FitConfig, argparse.Namespace(**_defaults()))
+        given = {name: value for name, value in values.items() if value != defaults[name]}
+        config = dataclasses.replace(load_config(args.config), **given).validate()
     else:
-        config = FitConfig(**dataclass_values(FitConfig, args)).validate()
+        config = FitConfig(**values).validate()
     if args.ray is None and len(args.session) == 1:
         return _fit_here(args.session[0], config, args)
     if args.ray is None:
@@ -77,6 +82,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         fits = _fit_on_ray(config, args)
     return _report(fits)
+
+
+def _defaults() -> dict:
+    """Every fit option's default, as the parser gives it."""
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    return vars(parser.parse_args(["session"]))
 
 
 def _fit_here(session: Path, config: FitConfig, args: argparse.Namespace) -> int:

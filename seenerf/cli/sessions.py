@@ -11,7 +11,7 @@ from davis_io import describe_error
 from davis_io.prepare import prepare_session
 from seenerf.errors import TrainingStopped
 from seenerf.model.config import FitConfig
-from seenerf.train.fit import FitResult, fit_session, session_bins
+from seenerf.train.fit import FitResult, LogBook, fit_session, session_bins
 from seenerf.train.threads import limit_threads
 from seenerf.train.trainer import Trainer
 
@@ -46,14 +46,15 @@ def prepare_and_fit(
 ) -> FitResult:
     """Calibrate the sensor and estimate poses when missing, then fit (the budget counts both)."""
     limit_threads(config.threads)
-    spent_s = prepare_session(session_dir, session_bins(session_dir, config), log)
+    book = LogBook(log)  # the calibration's and poses' lines go into the run's log.txt too
+    spent_s = prepare_session(session_dir, session_bins(session_dir, config), book)
     return fit_session(
         session_dir,
         config,
         run_name=run_name,
         fresh=fresh,
         spent_s=spent_s,
-        log=log,
+        log=book,
         on_step=on_step,
     )
 

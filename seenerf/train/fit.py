@@ -20,11 +20,13 @@ from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
 from seenerf.model.config import FitConfig, save_config
 from seenerf.model.variants import get_variant
+from seenerf.provenance import software
 from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.trainer import Trainer, TrainSummary
 
 __all__ = [
     "FitResult",
+    "LogBook",
     "fit_data",
     "fit_session",
     "resolved_settings",
@@ -117,15 +119,40 @@ def fit_session(
         )
 
 
-def _logged_to(path: Path, log: Callable[[str], None]) -> Callable[[str], None]:
-    """``log`` that also appends each line, time-stamped, to ``path``."""
+class LogBook:
+    """A fit's lines, shown as they come and kept, time-stamped, in its run's ``log.txt``.
 
-    def both(line: str) -> None:
-        with output_errors(path), open(path, "a", encoding="utf-8") as file:
-            file.write(f"{time.strftime('%Y-%m-%d %H:%M:%S')}  {line}\n")
-        log(line)
+    Lines logged before the run folder is known (the calibration and poses of ``seecap fit``)
+    are held and written first when :meth:`open` names the file.
 
-    return both
+    Args:
+        show: receives every line (the progress display).
+    """
+
+    def __init__(self, show: Callable[[str], None] = print):
+        self.show = show
+        self.path: Path | None = None
+        self._held: list[str] = []
+
+    def __call__(self, line: str) -> None:
+        """Show ``line`` and keep it."""
+        stamped = f"{time.strftime('%Y-%m-%d %H:%M:%S')}  {line}\n"
+        if self.path is None:
+            self._held.append(stamped)
+        else:
+            self._write([stamped])
+        self.show(line)
+
+    def open(self, path: Path) -> LogBook:
+        """From now on append to ``path``, the held lines first."""
+        self.path = path
+        held, self._held = self._held, []
+        self._write(held)
+        return self
+
+    def _write(self, lines: list[str]) -> None:
+        with output_errors(self.path), open(self.path, "a", encoding="utf-8") as file:
+            file.writelines(lines)
 
 
 def resolved_settings(trainer: Trainer) -> dict:
@@ -159,7 +186,8 @@ def fit_data(
 ) -> FitResult:
     """Train on ``data`` in ``run_dir`` (resuming a checkpoint unless ``fresh``), render, score.
 
-    Every line logged also goes to ``run_dir/log.txt``.
+    Every line logged also goes to ``run_dir/log.txt`` (a :class:`LogBook` given as ``log``
+    writes there the lines it held first).
     """
     with writer_lock(run_dir, f"fitting {run_dir.name}"):
         return _fit(data, config, run_dir, fresh, log, spent_s, on_step)
@@ -168,7 +196,7 @@ def fit_data(
 def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     if fresh:
         start_over(run_dir)
-    log = _logged_to(run_dir / "log.txt", log)
+    log = (log if isinstance(log, LogBook) else LogBook(log)).open(run_dir / "log.txt")
     trainer = Trainer(data, config, run_dir, log, spent_s, on_step)
     threads = torch.get_num_threads() if trainer.device == "cpu" else 0
     log(
@@ -187,7 +215,11 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
             f"frames measured linear: response linear above black {crf.black:.3f}, clipped at "
             f"{crf.saturation:.3f} (--response learned learns it instead)"
         )
-    save_config(config, run_dir / "config.json", resolved_settings(trainer))
+    save_config(
+        config,
+        run_dir / "config.json",
+        {**resolved_settings(trainer), "software": software(trainer.device)},
+    )
     summary = trainer.train()
     log(
         f"trained {summary.steps} steps in {summary.elapsed_s:.0f} s ({summary.stopped}); "

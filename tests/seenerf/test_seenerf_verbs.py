@@ -4,6 +4,7 @@ import subprocess
 import sys
 
 import pytest
+import torch
 
 from davis_io.cli import VERBS
 from davis_io.session import seconds_argument
@@ -79,17 +80,46 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
     assert seen["spent_s"] == 12.5  # the budget counts the preparation
     assert seen["config"].threshold == pytest.approx(0.35)
     assert parser.parse_args([str(tmp_path)]).threshold == 0.0  # 0: measured
-    # A run's saved config.json fits again as it was, whatever the other options say.
+    # A run's saved config.json fits again as it was; options given beside it replace its values.
     from seenerf.model.config import save_config
 
-    save_config(FitConfig(threshold=0.25, seed=7), tmp_path / "config.json")
+    save_config(FitConfig(threshold=0.25, seed=7, steps=40), tmp_path / "config.json")
     with pytest.raises(SystemExit):
         fit_verb.run(
             parser.parse_args(
                 [str(tmp_path), "--config", str(tmp_path / "config.json"), "--seed", "1"]
             )
         )
-    assert (seen["config"].threshold, seen["config"].seed) == (0.25, 7)
+    assert (seen["config"].threshold, seen["config"].seed, seen["config"].steps) == (0.25, 1, 40)
+
+
+def test_a_fits_log_holds_the_preparation_and_its_config_the_software(monkeypatch, tmp_path):
+    import seenerf.cli.sessions
+    from seenerf.cli.sessions import prepare_and_fit
+    from seenerf.data.synthetic import plane_scene
+
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
+
+    def fake_prepare(session, b, log=print):
+        log("measuring the sensor from the recording")
+        log("estimating poses (b=2)")
+        return 1.0
+
+    monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", fake_prepare)
+    monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 2)
+    monkeypatch.setattr("seenerf.train.fit.session_bins", lambda session, config: 2)
+    monkeypatch.setattr("seenerf.train.fit.load_training_data", lambda *a, **k: scene)
+    (tmp_path / "session.json").write_text("{}")
+    config = FitConfig(steps=2, batch_pixels=8, warm_steps=2, validation_share=0.1)
+    shown = []
+    result = prepare_and_fit(tmp_path, config, log=shown.append)
+    log = (result.run_dir / "log.txt").read_text().splitlines()
+    assert log[0].endswith("  measuring the sensor from the recording")
+    assert log[1].endswith("  estimating poses (b=2)") and "training fast full" in log[2]
+    assert shown[:2] == ["measuring the sensor from the recording", "estimating poses (b=2)"]
+    software = json.loads((result.run_dir / "config.json").read_text())["software"]
+    assert software["device"] == "cpu" and software["torch"] == torch.__version__
+    assert software["seecap"] and software["commit"]
 
 
 def test_a_stopped_fit_exits_143_with_one_line(monkeypatch, tmp_path, capsys):

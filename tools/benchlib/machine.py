@@ -5,10 +5,11 @@ from __future__ import annotations
 import os
 import platform
 import shlex
-import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+
+from seenerf.provenance import source_commit
 
 __all__ = ["Machine", "cpu_model", "describe_machine", "exact_command", "source_commit"]
 
@@ -73,23 +74,3 @@ def exact_command(argv: list[str] | None = None) -> str:
     """The command line as typed, quoted for a POSIX shell (interpreter by its base name)."""
     argv = sys.argv if argv is None else argv
     return shlex.join([Path(sys.executable).name, *argv])
-
-
-def source_commit() -> str:
-    """The checkout's commit, with ``+changes`` when the tree differs from it ("unknown" outside
-    a git checkout)."""
-    root = Path(__file__).resolve().parents[2]
-    try:
-        commit = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"],
-            cwd=root,
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return commit + ("+changes" if dirty else "")
