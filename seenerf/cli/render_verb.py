@@ -36,12 +36,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="name of an output folder inside the run (default: held-out, or path with "
         "--path); the fit's own renders/ are never overwritten",
     )
+    parser.add_argument(
+        "--video",
+        type=Path,
+        metavar="FILE.mp4",
+        help="also write the views as an MP4 video: at the one --exposure given, or "
+        "tone-mapped HDR without one (--path orbit makes a turn around the scene)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     """Render; print where; return 0."""
     from seenerf.train import render_run
 
-    out = render_run(args.run_dir, tuple(args.exposure), args.path, args.out)
+    out = render_run(args.run_dir, tuple(args.exposure), args.path, args.out, args.video)
     print(f"renders: {out}")
+    if args.video is not None:
+        print(f"video: {args.video}")
     return 0

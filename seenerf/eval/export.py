@@ -44,9 +44,13 @@ def write_png(path: Path, image: np.ndarray) -> None:
         raise not_written(path, "OpenCV could not write it", RENDER_AGAIN)
 
 
-def tone_mapped_preview(hdr: np.ndarray) -> np.ndarray:
-    """``ln(1 + 5000 x) / ln(5001)`` of ``x = hdr / max(hdr)``: a viewable image in [0, 1]."""
-    peak = float(hdr.max()) if np.isfinite(hdr).all() and hdr.max() > 0 else 1.0
+def tone_mapped_preview(hdr: np.ndarray, peak: float | None = None) -> np.ndarray:
+    """``ln(1 + 5000 x) / ln(5001)`` of ``x = hdr / peak``: a viewable image in [0, 1].
+
+    ``peak`` defaults to the image's own brightest value (a path of views passes one for all).
+    """
+    if peak is None:
+        peak = float(hdr.max()) if np.isfinite(hdr).all() and hdr.max() > 0 else 1.0
     return np.log1p(5000.0 * np.clip(hdr / peak, 0.0, 1.0)) / math.log(5001.0)
 
 

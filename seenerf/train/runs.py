@@ -16,6 +16,7 @@ from seenerf.data.session import load_training_data
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import bracket_exposures, render_outputs
+from seenerf.eval.video import video_frames, write_video
 from seenerf.eval.views import render_views, write_views
 from seenerf.model.config import FitConfig, load_config
 from seenerf.model.model import SeeNerfModel
@@ -107,15 +108,23 @@ def render_run(
     exposures_s: tuple[float, ...] = (),
     path: str | None = None,
     out_name: str | None = None,
+    video: Path | None = None,
 ) -> Path:
     """Render a run along a camera path (``orbit``, a file, or the held-out views if None).
 
     The views go to ``run_dir/out_name`` (default ``held-out`` or ``path``), never into the
-    fit's own ``renders/``.
+    fit's own ``renders/``; with ``video``, also an MP4 there: at the one exposure given, or
+    tone-mapped HDR.
 
     Raises:
         davis_io.errors.UsageError: ``out_name`` is not a plain folder name.
+        CheckpointError: a video asked for at several exposures, or not writable.
     """
+    if video is not None and len(exposures_s) > 1:
+        raise CheckpointError(
+            f"--video {video}: a video shows one exposure (or, without --exposure, tone-mapped "
+            f"HDR); {len(exposures_s)} were given"
+        )
     if out_name is not None:
         plain_name(out_name, "--out")
     run = open_run(run_dir)
@@ -141,6 +150,8 @@ def render_run(
         run.data.image_size,
         {"seecap_variant": run.config.variant, "seecap_path": str(path or "held-out views")},
     )
+    if video is not None:
+        write_video(video, video_frames(views, exposures_s[0] if exposures_s else None))
     return out_dir
 
 

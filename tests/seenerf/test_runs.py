@@ -37,3 +37,21 @@ def test_bad_camera_path_and_missing_run_are_typed_errors(tmp_path):
         read_path(tmp_path / "path.npy")
     with pytest.raises(CheckpointError, match="seecap fit first"):
         open_run(tmp_path)
+
+
+def test_a_video_shows_one_exposure_or_hdr_under_one_tone_map(tmp_path):
+    from seenerf.eval.video import video_frames
+    from seenerf.eval.views import RenderedViews
+    from seenerf.train.runs import render_run
+
+    with pytest.raises(CheckpointError, match="a video shows one exposure"):
+        render_run(tmp_path, (0.01, 0.1), "orbit", None, tmp_path / "v.mp4")
+    dim, bright = np.full((2, 2, 3), 0.5), np.full((2, 2, 3), 2.0)
+    views = RenderedViews(
+        np.zeros((2, 4, 4)), (0.01, 0.1), [dim, bright], [[dim, dim], [bright, bright]]
+    )
+    hdr = video_frames(views, None)
+    # One peak (2.0) for the whole path: the dim view stays dimmer than the bright one.
+    assert hdr[0][0, 0, 0] == pytest.approx(np.log1p(5000 * 0.25) / np.log(5001))
+    assert hdr[1][0, 0, 0] == pytest.approx(1.0)
+    assert video_frames(views, 0.09)[0] is bright  # the exposure nearest 0.09 s: 0.1 s
