@@ -14,7 +14,7 @@ import h5py
 import numpy as np
 
 from davis_io.errors import SessionError
-from davis_io.session.layout import EVENT_FIELDS, H5_NAME, create_image_dataset
+from davis_io.session.layout import EVENT_FIELDS, FILE_FORMAT, H5_NAME, create_image_dataset
 from davis_io.session.lock import writer_lock
 from davis_io.session.manifest import (
     STATUS_INTERRUPTED,
@@ -112,6 +112,7 @@ def _summary(session: Session) -> dict:
         "event_gaps": _gaps(session.event_gaps()),
         "events_per_exposure_median": None if counts is None else _median(counts),
         "bins_stored": session.stored_bins(),
+        "hdf5_filters": _filters(session.filters()),
         "drops": dataclasses.asdict(manifest.drops),
         "calibration": _calibration(session),
         "truth": str(session.truth_dir) if session.truth_dir else None,
@@ -129,6 +130,17 @@ def _calibration(session: Session) -> dict | None:
         for key, value in facts.items()
         if key != "method"
     }
+
+
+def _filters(filters: dict[str, list[str]]) -> str:
+    """Which compression filters the file uses, and whether any HDF5 build reads them all."""
+    counts = ", ".join(f"{kind} ({len(names)} datasets)" for kind, names in sorted(filters.items()))
+    if "lzf" not in filters:
+        return f"{counts}; any HDF5 build reads them"
+    return (
+        f"{counts}; the recording's LZF needs h5py or HDF5's LZF plug-in (h5dump, HDFView, "
+        "MATLAB); everything written after it is gzip or plain"
+    )
 
 
 def _gaps(gaps: np.ndarray) -> str:
@@ -255,7 +267,7 @@ def _rewrite_h5(folder: Path, frames: int, events: int, manifest: SessionManifes
     try:
         with (
             h5py.File(source_path, "r", swmr=True) as source,
-            h5py.File(target_path, "w", libver="latest") as target,
+            h5py.File(target_path, "w", libver=FILE_FORMAT) as target,
         ):
             for name in source:
                 source.copy(source[name], target, name=name)

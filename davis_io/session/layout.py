@@ -11,11 +11,14 @@ from davis_io.types import EVENT_DTYPE
 __all__ = [
     "EVENT_FIELDS",
     "FRAME_TIMES",
+    "FILE_FORMAT",
     "H5_NAME",
     "append_rows",
     "bins_path",
     "complete_rows",
+    "PORTABLE",
     "create_bins_group",
+    "dataset_filters",
     "create_image_dataset",
     "create_layout",
     "poses_path",
@@ -25,12 +28,20 @@ __all__ = [
 ]
 
 H5_NAME = "session.h5"
+FILE_FORMAT = ("v110", "v110")
+"""HDF5 file-format versions ``session.h5`` is written in (h5py's ``libver``): those of HDF5
+1.10, the first with single-writer/multiple-reader mode, so that any HDF5 from 1.10 on reads
+it. ("latest" would be the format of the HDF5 that h5py bundles, 2.0, which no 1.x tool opens:
+h5dump 1.10.8 failed on every dataset.)"""
 EVENT_FIELDS = ("t", "x", "y", "p")
 FRAME_TIMES = ("exposure_start_us", "exposure_end_us", "readout_start_us", "readout_end_us")
 _EVENT_CHUNK = 1 << 17
 _SMALL_CHUNK = 1024
 _FAST = {"compression": "lzf", "shuffle": True}
 """LZF with byte shuffle: fast enough for a live stream, 20x smaller times, 2x smaller counts."""
+PORTABLE = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
+"""Deflate (level 1) with byte shuffle, for what is written after the recording: every HDF5
+build reads it (HDFView, MATLAB, h5dump with no plug-in), and nothing there races a stream."""
 _PACKED = {"scaleoffset": 0}
 """HDF5's integer scale-offset filter (lossless for integers with automatic bit width): each
 chunk stores value - minimum in as many bits as its range needs."""
@@ -101,15 +112,34 @@ def create_image_dataset(
     return image
 
 
-def create_bins_group(h5: h5py.File, *, b: int, width: int, height: int) -> h5py.Group:
-    """Create the empty datasets of ``/bins/b{b}``."""
+def create_bins_group(
+    h5: h5py.File, *, b: int, width: int, height: int, live: bool = True
+) -> h5py.Group:
+    """Create the empty datasets of ``/bins/b{b}`` (LZF while recording, else :data:`PORTABLE`)."""
     group = h5.require_group(bins_path(b))
-    _growable(group, "split_us", np.int64, (b + 1,))
-    _growable(group, "weights", np.float64, (b + 1,))
-    _growable(group, "raw", np.int16, (b, height, width), chunk_rows=1)
-    _growable(group, "calibrated", np.float32, (b, height, width), chunk_rows=1)
-    _growable(group, "event_count", np.int64)
+    compression = None if live else PORTABLE
+    for name, dtype, row, rows in (
+        ("split_us", np.int64, (b + 1,), _SMALL_CHUNK),
+        ("weights", np.float64, (b + 1,), _SMALL_CHUNK),
+        ("raw", np.int16, (b, height, width), 1),
+        ("calibrated", np.float32, (b, height, width), 1),
+        ("event_count", np.int64, (), _SMALL_CHUNK),
+    ):
+        _growable(group, name, dtype, row, chunk_rows=rows, compression=compression)
     return group
+
+
+def dataset_filters(h5: h5py.File) -> dict[str, list[str]]:
+    """Each compression filter the file uses and the datasets that use it (``none``: plain)."""
+    found: dict[str, list[str]] = {}
+
+    def visit(name: str, item) -> None:
+        if isinstance(item, h5py.Dataset):
+            kind = item.compression or ("scaleoffset" if item.scaleoffset is not None else "none")
+            found.setdefault(kind, []).append(name)
+
+    h5.visititems(visit)
+    return found
 
 
 def append_rows(dataset: h5py.Dataset, rows: np.ndarray) -> None:

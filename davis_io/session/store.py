@@ -26,6 +26,7 @@ from davis_io.session.layout import (
     bins_path,
     complete_rows,
     create_bins_group,
+    dataset_filters,
     poses_path,
     read_events_between,
     write_bins_row,
@@ -231,6 +232,10 @@ class Session(Closing):
             self.event_gaps(), columns["exposure_start_us"], columns["exposure_end_us"]
         )
         return FramesTable(**columns)
+
+    def filters(self) -> dict[str, list[str]]:
+        """Each HDF5 compression filter ``session.h5`` uses and its datasets (``none``: plain)."""
+        return dataset_filters(self._h5)
 
     def event_gaps(self) -> np.ndarray:
         """``(G, 2)`` start and end of each gap in the event stream, µs (:mod:`davis_io.gaps`).
@@ -441,7 +446,7 @@ class Session(Closing):
         with writer_lock(self.folder, f"adding bins for b={b}"), self._writable() as h5:
             if bins_path(b) in h5:
                 del h5[bins_path(b)]
-            group = create_bins_group(h5, b=b, width=self.width, height=self.height)
+            group = create_bins_group(h5, b=b, width=self.width, height=self.height, live=False)
             try:
                 for start_us, end_us in zip(
                     table.exposure_start_us, table.exposure_end_us, strict=True

@@ -47,6 +47,7 @@ import OpenEXR
 from davis_io.errors import SessionError
 from davis_io.geometry import interpolate_poses
 from davis_io.session.calibration import SensorCalibration
+from davis_io.session.layout import FILE_FORMAT
 from davis_io.types import ColorFilter
 
 __all__ = ["TEST_EXPOSURE_FACTORS", "TRUTH_DIR", "Truth", "load_truth", "save_truth"]
@@ -168,7 +169,7 @@ def save_truth(truth: Truth, folder: str | Path) -> Path:
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    with h5py.File(folder / "truth.h5", "w") as h5:
+    with h5py.File(folder / "truth.h5", "w", libver=FILE_FORMAT) as h5:
         h5.attrs.update(
             {
                 "scene": truth.scene,

@@ -16,6 +16,7 @@ import numpy as np
 from davis_io.bins import ExposureBins
 from davis_io.errors import SessionError
 from davis_io.session.layout import (
+    FILE_FORMAT,
     FRAME_TIMES,
     append_rows,
     bins_path,
@@ -168,7 +169,7 @@ class SessionWriter:
         try:
             check_free_space(self.path.parent, "a recording")
             _allocate(self._reserve, MIN_FREE_BYTES)
-            self._h5 = h5py.File(self.path, "w", libver="latest", rdcc_nbytes=_CHUNK_CACHE_BYTES)
+            self._h5 = h5py.File(self.path, "w", libver=FILE_FORMAT, rdcc_nbytes=_CHUNK_CACHE_BYTES)
         except OSError as error:
             self._reserve.unlink(missing_ok=True)
             raise SessionError(f"cannot create {self.path}: {error}") from error
@@ -292,7 +293,7 @@ class SessionWriter:
         """Close, reopen, create ``/frames/image`` and return to SWMR mode."""
         self.flush()
         self._h5.close()
-        self._h5 = h5py.File(self.path, "a", libver="latest", rdcc_nbytes=_CHUNK_CACHE_BYTES)
+        self._h5 = h5py.File(self.path, "a", libver=FILE_FORMAT, rdcc_nbytes=_CHUNK_CACHE_BYTES)
         create_image_dataset(
             self._h5,
             width=self.width,
