@@ -90,9 +90,15 @@ def _channels(path):
         return sorted(exr.channels())
 
 
-def test_a_mono_session_without_truth_renders_mono_everywhere(twins):
+@pytest.fixture(scope="module")
+def camera_run(twins):
+    """A short fit of the session as a real camera leaves it (no truth)."""
     _, camera = twins
-    result = fit_session(camera, FitConfig(steps=2, warm_steps=10), log=lambda line: None)
+    return fit_session(camera, FitConfig(steps=2, warm_steps=10), log=lambda line: None)
+
+
+def test_a_mono_session_without_truth_renders_mono_everywhere(camera_run):
+    result = camera_run
     renders = result.run_dir / "renders"
     exrs, pngs = sorted(renders.rglob("*.exr")), sorted(renders.rglob("*.png"))
     assert exrs and pngs
@@ -147,10 +153,9 @@ def _exr_pixels(path):
 
 
 def test_a_saved_run_renders_and_scores_in_a_new_process_as_the_fit_did(twins):
+    import os
     import subprocess
     import sys
-
-    import os
 
     emulated, _ = twins
     # One thread everywhere: several sum a ray's samples in an order that varies from run to
@@ -181,3 +186,50 @@ def test_a_saved_run_renders_and_scores_in_a_new_process_as_the_fit_did(twins):
     scored = json.loads((run / "metrics.json").read_text())
     assert scored["hdr"] == result.metrics["hdr"]
     assert scored["ldr"] == result.metrics["ldr"]
+
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no Chromium here: `make browser` installs Debian's")
+def test_the_report_opens_in_a_browser_with_every_image_and_a_working_slider(camera_run, tmp_path):
+    import re
+    import subprocess
+
+    report = camera_run.run_dir / "report.html"
+    assert report.exists()  # every fit writes one
+
+    def body(url: str) -> dict:
+        dom = subprocess.run(
+            [
+                CHROMIUM,
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--disable-quic",
+                "--no-first-run",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                f"--user-data-dir={tmp_path / 'profile'}",
+                "--virtual-time-budget=10000",
+                "--dump-dom",
+                url,
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        ).stdout
+        tag = re.search(r"<body([^>]*)>", dom).group(1)
+        return dict(re.findall(r'data-([\w-]+)="([^"]*)"', tag))
+
+    opened = body(report.as_uri())
+    total = int(opened["images-total"])
+    # Inputs, LDR and HDR renders of every view shown, and the three figures.
+    assert total >= 3 * 1 + 3 and int(opened["images-loaded"]) == total
+    saved = json.loads((camera_run.run_dir / "config.json").read_text())
+    exposures = sorted(float(p.name) for p in (camera_run.run_dir / "renders" / "ldr").iterdir())
+    assert float(opened["exposure"]) == pytest.approx(exposures[len(exposures) // 2])
+    slid = body(report.as_uri() + "#exposure=0")  # the slider moved to the shortest exposure
+    assert float(slid["exposure"]) == pytest.approx(exposures[0])
+    assert saved["software"]["device"] == "cpu"

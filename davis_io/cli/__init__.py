@@ -35,6 +35,7 @@ VERBS: dict[str, str] = {
     "fit": "seenerf.cli.fit_verb",
     "render": "seenerf.cli.render_verb",
     "eval": "seenerf.cli.eval_verb",
+    "report": "seenerf.cli.report_verb",
 }
 """Every verb of ``seecap``, in the order ``--help`` lists them."""
 

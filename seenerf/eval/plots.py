@@ -8,7 +8,7 @@ import numpy as np
 
 from davis_io.session import output_errors
 
-__all__ = ["crf_plot", "training_curves"]
+__all__ = ["camera_path_plot", "crf_plot", "training_curves"]
 
 _CHANNELS = (("R", "tab:red"), ("G", "tab:green"), ("B", "tab:blue"))
 
@@ -80,4 +80,35 @@ def training_curves(path: Path, history: list[dict]) -> None:
     more = losses.get_legend_handles_labels()
     axes.legend(lines[0] + more[0], lines[1] + more[1], fontsize="small", loc="center right")
     axes.grid(alpha=0.3)
+    _save(pyplot, figure, path)
+
+
+def camera_path_plot(path: Path, centres: np.ndarray, registered: np.ndarray) -> None:
+    """The camera centres ``(N, 3)`` in time order, seen along the path's thinnest direction.
+
+    Registered latent poses are dots on the line; those COLMAP left out (interpolated) rings.
+    """
+    centres = np.asarray(centres, np.float64).reshape(-1, 3)
+    pyplot, figure, axes = _figure((5.0, 4.2))
+    if len(centres):
+        mean = centres.mean(axis=0)
+        _, _, directions = np.linalg.svd(centres - mean, full_matrices=False)
+        flat = (centres - mean) @ directions[:2].T
+        registered = np.asarray(registered, bool).reshape(-1)
+        axes.plot(flat[:, 0], flat[:, 1], color="0.6", linewidth=0.8)
+        axes.scatter(*flat[registered].T, s=8, color="tab:blue", label="registered")
+        if (~registered).any():
+            axes.scatter(
+                *flat[~registered].T,
+                s=14,
+                facecolors="none",
+                edgecolors="tab:red",
+                label="interpolated",
+            )
+        axes.scatter(*flat[0], s=40, marker="^", color="black", label="start")
+        axes.set_aspect("equal", adjustable="datalim")
+    axes.set_xlabel("along the path's widest direction")
+    axes.set_ylabel("across it")
+    axes.grid(alpha=0.3)
+    axes.legend(fontsize="small")
     _save(pyplot, figure, path)

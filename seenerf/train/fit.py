@@ -18,6 +18,7 @@ from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
+from seenerf.eval.report import is_session_run, write_report
 from seenerf.model.config import FitConfig, save_config
 from seenerf.model.variants import get_variant
 from seenerf.provenance import software
@@ -245,4 +246,6 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         "latent_travel_px": travel_px,
     }
     write_json(run_dir / "metrics.json", metrics)
+    if is_session_run(run_dir):
+        log(f"report: {write_report(run_dir)}")
     return FitResult(run_dir, summary, metrics)
