@@ -78,3 +78,28 @@ def test_the_default_fit_completes_and_renders(view_by_view):
     assert (result.run_dir / "renders" / "hdr").is_dir()
     assert result.summary.steps == 3 and result.summary.skipped_steps == 0
     assert "hdr" in result.metrics  # scored against the emulator's truth
+
+
+def test_a_session_whose_every_exposure_lost_events_is_fitted_whole(view_by_view, tmp_path):
+    import json
+    import shutil
+
+    from seenerf.data.session import load_training_data
+
+    folder, _ = view_by_view
+    copy = tmp_path / "dropped"
+    shutil.copytree(folder, copy, ignore=shutil.ignore_patterns("fit", ".writer.lock"))
+    manifest = json.loads((copy / "session.json").read_text())
+    with Session.open(copy) as session:
+        table = session.frames_table()
+    # A stream that dropped out in every exposure: each is inside a gap.
+    manifest["event_gaps_us"] = [
+        [int(start) - 1, int(end) + 1]
+        for start, end in zip(table.exposure_start_us, table.exposure_end_us, strict=True)
+    ]
+    (copy / "session.json").write_text(json.dumps(manifest))
+    with Session.open(copy) as session:
+        assert session.frames_table().events_lost.all()
+    with pytest.warns(UserWarning, match="every frame's exposure lost events"):
+        data = load_training_data(copy, 4)
+    assert data.num_frames == len(table.exposure_us)

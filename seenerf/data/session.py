@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -82,8 +83,15 @@ def load_training_data(
         bins = session.contrast_bins(b, calibration, settled=True)
         c2w = _poses_at(poses, session.bins(b).split_us, bins.split_us)
         usable = np.flatnonzero(keep_lost | ~np.asarray(table.events_lost, bool))
+        if len(usable) == 0 and len(table.events_lost):
+            warnings.warn(
+                f"{session_dir}: every frame's exposure lost events (drops, or gaps in the "
+                "stream): fitting them all, their events as recorded",
+                stacklevel=2,
+            )
+            usable = np.arange(len(table.events_lost))
         if len(usable) == 0:
-            raise TrainingDataError(f"{session_dir}: every frame lost events; use keep_lost=True")
+            raise TrainingDataError(f"{session_dir}: the session holds no frame to fit")
         frames = [session.frame(int(i)) for i in usable]
         scale = float(2 ** frames[0].bit_depth - 1)
         ldr = np.stack([f.image for f in frames]).astype(np.float32) / scale
