@@ -14,6 +14,7 @@ from davis_io.session.folder import empty_folder, plain_name
 from seenerf.data.arrays import TrainingData
 from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
+from davis_io.errors import SeecapError
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
@@ -247,5 +248,8 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     }
     write_json(run_dir / "metrics.json", metrics)
     if is_session_run(run_dir):
-        log(f"report: {write_report(run_dir)}")
+        try:
+            log(f"report: {write_report(run_dir)}")
+        except (SeecapError, OSError) as error:  # the renders and scores stand without it
+            log(f"report.html not written ({error}); `seecap report {run_dir}` retries")
     return FitResult(run_dir, summary, metrics)
