@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import json
+import shutil
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import cv2
@@ -16,8 +17,16 @@ from davis_io.geometry import interpolate_poses
 from davis_io.poses.colmap import ColmapError, SparseModel
 from davis_io.poses.latent import calibrated_response, latent_images, sharpness
 from davis_io.poses.nerfstudio import latent_frame_name
-from davis_io.poses.recovery import reconstruct_with_recovery
-from davis_io.session import DEFAULT_BINS, Session, SessionPoses, writer_lock
+from davis_io.poses.recovery import Outcome, reconstruct_with_recovery
+from davis_io.session import (
+    DEFAULT_BINS,
+    DEFAULT_THRESHOLD,
+    SensorCalibration,
+    Session,
+    SessionPoses,
+    default_calibration,
+    writer_lock,
+)
 from davis_io.session.writer import check_free_space, not_written
 
 __all__ = [
@@ -50,6 +59,9 @@ class PoseReport:
         threshold_source: the calibration's source: ``measured``, ``given`` or ``default``.
         intrinsics: ``(fx, fy, cx, cy)`` pixels.
         bounds: near and far depth of the sparse points.
+        latent_sensor: the sensor values the kept latent frames were made with (the
+            calibration's source, ``given`` or ``nominal``).
+        compared: what COLMAP said of each set of latent frames tried, by label.
     """
 
     registered: int
@@ -62,6 +74,8 @@ class PoseReport:
     threshold_source: str
     intrinsics: np.ndarray
     bounds: np.ndarray
+    latent_sensor: str = ""
+    compared: dict = field(default_factory=dict)
 
     @property
     def registered_fraction(self) -> float:
@@ -80,9 +94,20 @@ class PoseReport:
                 "intrinsics fx {:.2f} fy {:.2f} cx {:.2f} cy {:.2f} px".format(*self.intrinsics),
                 f"bounds near {self.bounds[0]:.3f} far {self.bounds[1]:.3f}",
                 f"contrast threshold {self.threshold:.3f} ({self.threshold_source})",
+                *self._comparison(),
                 "tracks per view: " + " ".join(str(int(n)) for n in per_view),
             ]
         )
+
+    def _comparison(self) -> list[str]:
+        if len(self.compared) < 2:
+            return []
+        tried = "; ".join(
+            f"{label}: {said['registered']} registered, tracks {said['mean_track_length']:.1f}, "
+            f"{said['reprojection_error_px']:.3f} px"
+            for label, said in self.compared.items()
+        )
+        return [f"latent frames kept: {self.latent_sensor} sensor values ({tried})"]
 
     def to_json(self) -> dict:
         """JSON-safe dictionary (arrays as lists)."""
@@ -254,44 +279,134 @@ def _estimate(session, b, intrinsics, force, progress, threshold) -> PoseReport:
             "seen from different positions. Record longer"
         )
     progress("calibrating the sensor", 0, 0)
-    calibration = session_calibration(session)
+    candidates = _latent_sensors(session_calibration(session), threshold)
+    _check_room(
+        session.folder,
+        session.frame_count * (b + 1) * len(candidates),
+        session.height,
+        session.width,
+    )
+    trials, failures = [], []
+    for label, calibration in candidates:
+        folder = work_dir if not trials and not failures else work_dir / label
+        try:
+            trials.append(_reconstruct(session, b, label, calibration, folder, intrinsics, progress))
+        except ColmapError as error:
+            failures.append(error)
+    if not trials:
+        raise failures[0]
+    kept = max(trials, key=lambda trial: trial.quality)
+    if kept.folder != work_dir:
+        _promote(kept.folder, work_dir)
+    poses = _session_poses(kept.outcome.model, kept.names, kept.split_us)
+    session.write_poses(b, poses)
+    model = kept.outcome.model
+    report = PoseReport(
+        registered=int(poses.registered.sum()),
+        total=len(kept.names) * (b + 1),
+        reprojection_error_px=model.reprojection_error_px,
+        track_counts=np.array([[model.track_counts.get(n, 0) for n in view] for view in kept.names]),
+        strategy=kept.outcome.strategy,
+        tried=kept.outcome.tried,
+        threshold=kept.calibration.threshold,
+        threshold_source=kept.calibration.source,
+        intrinsics=poses.intrinsics,
+        bounds=poses.bounds,
+        latent_sensor=kept.label,
+        compared={trial.label: trial.colmap_says() for trial in trials},
+    )
+    report_path.write_text(json.dumps(report.to_json(), indent=1))
+    return report
+
+
+NOMINAL_FOR_POSES = "nominal"
+"""Label (and ``colmap/`` subfolder) of the latent frames made with the nominal sensor."""
+
+
+def _latent_sensors(calibration, threshold):
+    """The sensor values to make latent frames with, by label: the calibration (with the given
+    threshold, if any), and beside a calibration measured in part the nominal sensor, so that
+    poses never pay for a doubtful value (the better reconstruction is kept). A calibration
+    that measured nothing EDI uses is the nominal sensor already."""
     if threshold is not None:
-        calibration = calibration.with_threshold(threshold)
+        return [("given", calibration.with_threshold(threshold))]
+    if not calibration.assumed or calibration.source in ("default", "assumed"):
+        return [(calibration.source, calibration)]
+    nominal = default_calibration(
+        DEFAULT_THRESHOLD, "the nominal sensor, tried for poses beside a calibration in part assumed"
+    )
+    return [(calibration.source, calibration), (NOMINAL_FOR_POSES, nominal)]
+
+
+@dataclass(frozen=True)
+class _Trial:
+    """One reconstruction of the latent frames made with one set of sensor values."""
+
+    label: str
+    calibration: SensorCalibration
+    folder: Path
+    names: list[list[str]]
+    split_us: np.ndarray
+    outcome: Outcome
+
+    @property
+    def mean_track_length(self) -> float:
+        """Mean number of registered latent frames that see each 3-D point."""
+        model = self.outcome.model
+        return sum(model.track_counts.values()) / max(len(model.points), 1)
+
+    @property
+    def quality(self) -> tuple:
+        """What COLMAP says of it, best largest: a model that met the registration target, the
+        share of latent frames registered (to 1 %), longer tracks, then a smaller reprojection
+        error."""
+        total = sum(len(view) for view in self.names)
+        return (
+            self.outcome.succeeded,
+            round(len(self.outcome.model.c2w) / max(total, 1), 2),
+            round(self.mean_track_length, 1),
+            -self.outcome.model.reprojection_error_px,
+        )
+
+    def colmap_says(self) -> dict:
+        """The numbers the comparison was made on, for the report."""
+        return {
+            "registered": len(self.outcome.model.c2w),
+            "mean_track_length": self.mean_track_length,
+            "reprojection_error_px": self.outcome.model.reprojection_error_px,
+            "threshold": self.calibration.threshold,
+        }
+
+
+def _reconstruct(session, b, label, calibration, folder, intrinsics, progress) -> _Trial:
     bins = session.contrast_bins(b, calibration)
-    _check_room(session.folder, bins.calibrated.shape[0] * (b + 1), session.height, session.width)
     names, scores = _write_latent_frames(
-        session, bins, calibrated_response(calibration), work_dir / "images", progress
+        session, bins, calibrated_response(calibration), folder / "images", progress
     )
     total = len(names) * (b + 1)
     registered_so_far = [0]
 
     def on_image() -> None:
         registered_so_far[0] = min(registered_so_far[0] + 1, total)
-        progress("registering", registered_so_far[0], total)
+        progress(f"registering ({label} sensor)", registered_so_far[0], total)
 
     outcome = reconstruct_with_recovery(
-        work_dir,
-        work_dir / "images",
+        folder,
+        folder / "images",
         names,
         scores,
         intrinsics=intrinsics,
-        stage=lambda name: progress(name, 0, 0),
+        stage=lambda name: progress(f"{name} ({label} sensor)", 0, 0),
         on_image=on_image,
     )
-    poses = _session_poses(outcome.model, names, bins.split_us)
-    session.write_poses(b, poses)
-    tracks = np.array([[outcome.model.track_counts.get(n, 0) for n in view] for view in names])
-    report = PoseReport(
-        registered=int(poses.registered.sum()),
-        total=total,
-        reprojection_error_px=outcome.model.reprojection_error_px,
-        track_counts=tracks,
-        strategy=outcome.strategy,
-        tried=outcome.tried,
-        threshold=calibration.threshold,
-        threshold_source=calibration.source,
-        intrinsics=poses.intrinsics,
-        bounds=poses.bounds,
-    )
-    report_path.write_text(json.dumps(report.to_json(), indent=1))
-    return report
+    return _Trial(label, calibration, folder, names, bins.split_us, outcome)
+
+
+def _promote(folder: Path, work_dir: Path) -> None:
+    """Make ``folder`` (inside ``work_dir``) the COLMAP work of the session, replacing the rest."""
+    for entry in work_dir.iterdir():
+        if entry != folder:
+            shutil.rmtree(entry) if entry.is_dir() else entry.unlink()
+    for entry in folder.iterdir():
+        entry.rename(work_dir / entry.name)
+    folder.rmdir()

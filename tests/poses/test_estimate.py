@@ -2,7 +2,7 @@ import json
 
 import numpy as np
 import pytest
-from emulated_sessions import record_emulated
+from emulated_sessions import REDUCED, record_emulated
 
 from davis_io.cli import main
 from davis_io.errors import UsageError
@@ -127,3 +127,45 @@ def test_a_disk_too_small_for_colmap_is_refused_before_it_starts(
     assert "10.0 MB free" in last and "estimating poses (30 latent frames" in last
     assert "needs 18 MB (1 MB for its files and 17 MB to close them intact)" in last
     assert not (textureless_session / "colmap" / "images").exists()
+
+
+def test_latent_frames_are_made_with_the_nominal_sensor_beside_a_doubtful_calibration():
+    from davis_io.poses.estimate import _latent_sensors
+    from davis_io.session import DEFAULT_THRESHOLD, SensorCalibration, default_calibration
+
+    measured = SensorCalibration(0.3, 0.4)
+    assert [label for label, _ in _latent_sensors(measured, None)] == ["measured"]
+    doubtful = SensorCalibration(0.3, 0.4, assumed={"latency_us": "at its search's bound"})
+    (_, first), (label, nominal) = _latent_sensors(doubtful, None)
+    assert first is doubtful and label == "nominal"
+    assert nominal.threshold_on == nominal.threshold_off == DEFAULT_THRESHOLD
+    given = _latent_sensors(doubtful, 0.2)
+    assert [(label, c.threshold) for label, c in given] == [("given", 0.2)]
+    nothing = default_calibration(0.25, "no frames")
+    assert [label for label, _ in _latent_sensors(nothing, None)] == ["default"]
+
+
+def test_poses_keep_the_nominal_sensors_frames_when_the_calibration_ruins_them(tmp_path):
+    from davis_io.session import DEFAULT_THRESHOLD, SensorCalibration
+
+    folder, intrinsics = record_emulated(tmp_path / "room", **REDUCED)
+    # Thresholds ten times too large, flagged as assumed: the latent frames it makes are
+    # the blurred frames multiplied by wild exponentials of the events.
+    wrong = SensorCalibration(3.0, 3.0, assumed={"thresholds": "at its search's bound"})
+    with Session.open(folder) as session:
+        session.write_calibration(wrong)
+    report = estimate_poses(folder, b=4, intrinsics=intrinsics)
+    assert set(report.compared) == {"measured", "nominal"}
+    assert report.latent_sensor == "nominal" and report.threshold == pytest.approx(DEFAULT_THRESHOLD)
+    said = report.compared
+    assert said["nominal"]["registered"] >= said["measured"]["registered"]
+    assert "latent frames kept: nominal" in report.summary()
+    colmap = folder / "colmap"
+    assert not (colmap / "nominal").exists() and len(list((colmap / "images").glob("*"))) == 40
+    with Session.open(folder) as session:
+        errors = compare_with_truth(
+            session.poses(4), session.bins(4).split_us, load_truth(session.truth_dir)
+        )
+    assert errors.median_rotation_deg < 1.0
+    saved = json.loads((colmap / "report.json").read_text())
+    assert saved["latent_sensor"] == "nominal" and set(saved["compared"]) == {"measured", "nominal"}
