@@ -10,7 +10,7 @@ from davis_io.calibration.session_calibration import session_calibration
 from davis_io.poses.estimate import estimate_poses
 from davis_io.session import Session
 
-__all__ = ["prepare_session"]
+__all__ = ["StageLines", "prepare_session"]
 
 
 def prepare_session(session_dir: Path | str, b: int, log: Callable[[str], None] = print) -> float:
@@ -34,7 +34,40 @@ def prepare_session(session_dir: Path | str, b: int, log: Callable[[str], None] 
             log("measuring the sensor from the recording")
             calibration = session_calibration(session, progress=log)
             log(calibration.summary())
+            log(f"sensor measured in {time.perf_counter() - start:.0f} s")
         if session.poses(b) is None:
             log(f"estimating poses (b={b})")
-            log(estimate_poses(session, b=b).summary())
+            begun = time.perf_counter()
+            log(estimate_poses(session, b=b, progress=StageLines(log)).summary())
+            log(f"poses estimated in {time.perf_counter() - begun:.0f} s")
     return time.perf_counter() - start
+
+
+class StageLines:
+    """Progress of the pose steps as log lines.
+
+    Each stage as it starts, and a counted one at each quarter of its count with the time taken
+    and the time left at that pace.
+
+    Args:
+        log: receives each line.
+        clock: seconds, monotonic (a test's own clock).
+    """
+
+    def __init__(self, log: Callable[[str], None], clock: Callable[[], float] = time.perf_counter):
+        self.log, self.clock = log, clock
+        self.stage: str | None = None
+        self.started = 0.0
+        self.quarter = 1
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        """Report that ``done`` of ``total`` (0: not counted) of ``stage`` are done."""
+        now = self.clock()
+        if stage != self.stage:
+            self.stage, self.started, self.quarter = stage, now, 1
+            self.log(f"poses: {stage}")
+        if total and done > 0 and 4 * done >= self.quarter * total:
+            spent = now - self.started
+            left = spent * (total - done) / done
+            self.log(f"poses: {stage} {done}/{total} in {spent:.0f} s, about {left:.0f} s left")
+            self.quarter = 4 * done // total + 1

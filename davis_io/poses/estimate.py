@@ -289,8 +289,9 @@ def _estimate(session, b, intrinsics, force, progress, threshold) -> PoseReport:
     trials, failures = [], []
     for label, calibration in candidates:
         folder = work_dir if not trials and not failures else work_dir / label
+        named = _labelled(progress, label) if len(candidates) > 1 else progress
         try:
-            trials.append(_reconstruct(session, b, label, calibration, folder, intrinsics, progress))
+            trials.append(_reconstruct(session, b, label, calibration, folder, intrinsics, named))
         except ColmapError as error:
             failures.append(error)
     if not trials:
@@ -305,7 +306,9 @@ def _estimate(session, b, intrinsics, force, progress, threshold) -> PoseReport:
         registered=int(poses.registered.sum()),
         total=len(kept.names) * (b + 1),
         reprojection_error_px=model.reprojection_error_px,
-        track_counts=np.array([[model.track_counts.get(n, 0) for n in view] for view in kept.names]),
+        track_counts=np.array(
+            [[model.track_counts.get(n, 0) for n in view] for view in kept.names]
+        ),
         strategy=kept.outcome.strategy,
         tried=kept.outcome.tried,
         threshold=kept.calibration.threshold,
@@ -324,16 +327,20 @@ NOMINAL_FOR_POSES = "nominal"
 
 
 def _latent_sensors(calibration, threshold):
-    """The sensor values to make latent frames with, by label: the calibration (with the given
-    threshold, if any), and beside a calibration measured in part the nominal sensor, so that
-    poses never pay for a doubtful value (the better reconstruction is kept). A calibration
-    that measured nothing EDI uses is the nominal sensor already."""
+    """The sensor values to make latent frames with, by label.
+
+    The calibration (with the given threshold, if any), and beside a calibration measured in
+    part the nominal sensor, so that poses never pay for a doubtful value (the better
+    reconstruction is kept). A calibration that measured nothing EDI uses is the nominal sensor
+    already.
+    """
     if threshold is not None:
         return [("given", calibration.with_threshold(threshold))]
     if not calibration.assumed or calibration.source in ("default", "assumed"):
         return [(calibration.source, calibration)]
     nominal = default_calibration(
-        DEFAULT_THRESHOLD, "the nominal sensor, tried for poses beside a calibration in part assumed"
+        DEFAULT_THRESHOLD,
+        "the nominal sensor, tried for poses beside a calibration in part assumed",
     )
     return [(calibration.source, calibration), (NOMINAL_FOR_POSES, nominal)]
 
@@ -357,9 +364,11 @@ class _Trial:
 
     @property
     def quality(self) -> tuple:
-        """What COLMAP says of it, best largest: a model that met the registration target, the
-        share of latent frames registered (to 1 %), longer tracks, then a smaller reprojection
-        error."""
+        """What COLMAP says of it, the better the larger.
+
+        A model that met the registration target, the share of latent frames registered (to
+        1 %), longer tracks, then a smaller reprojection error.
+        """
         total = sum(len(view) for view in self.names)
         return (
             self.outcome.succeeded,
@@ -378,6 +387,15 @@ class _Trial:
         }
 
 
+def _labelled(progress: Progress, label: str) -> Progress:
+    """``progress`` with each stage named for the sensor values its latent frames were made with."""
+
+    def named(stage: str, done: int, total: int) -> None:
+        progress(f"{stage} ({label} sensor)", done, total)
+
+    return named
+
+
 def _reconstruct(session, b, label, calibration, folder, intrinsics, progress) -> _Trial:
     bins = session.contrast_bins(b, calibration)
     names, scores = _write_latent_frames(
@@ -388,7 +406,7 @@ def _reconstruct(session, b, label, calibration, folder, intrinsics, progress) -
 
     def on_image() -> None:
         registered_so_far[0] = min(registered_so_far[0] + 1, total)
-        progress(f"registering ({label} sensor)", registered_so_far[0], total)
+        progress("registering", registered_so_far[0], total)
 
     outcome = reconstruct_with_recovery(
         folder,
@@ -396,7 +414,7 @@ def _reconstruct(session, b, label, calibration, folder, intrinsics, progress) -
         names,
         scores,
         intrinsics=intrinsics,
-        stage=lambda name: progress(f"{name} ({label} sensor)", 0, 0),
+        stage=lambda name: progress(name, 0, 0),
         on_image=on_image,
     )
     return _Trial(label, calibration, folder, names, bins.split_us, outcome)

@@ -156,7 +156,9 @@ def test_poses_keep_the_nominal_sensors_frames_when_the_calibration_ruins_them(t
         session.write_calibration(wrong)
     report = estimate_poses(folder, b=4, intrinsics=intrinsics)
     assert set(report.compared) == {"measured", "nominal"}
-    assert report.latent_sensor == "nominal" and report.threshold == pytest.approx(DEFAULT_THRESHOLD)
+    assert report.latent_sensor == "nominal" and report.threshold == pytest.approx(
+        DEFAULT_THRESHOLD
+    )
     said = report.compared
     assert said["nominal"]["registered"] >= said["measured"]["registered"]
     assert "latent frames kept: nominal" in report.summary()
