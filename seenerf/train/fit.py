@@ -9,12 +9,12 @@ from pathlib import Path
 
 import torch
 
+from davis_io.errors import SeecapError
 from davis_io.session import DEFAULT_BINS, Session, output_errors, writer_lock
 from davis_io.session.folder import empty_folder, plain_name
 from seenerf.data.arrays import TrainingData
 from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
-from davis_io.errors import SeecapError
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import render_outputs
