@@ -1,4 +1,4 @@
-"""Blind benchmark: six sessions with randomly drawn sensors, each fitted from its recording.
+"""Blind benchmark: sessions with randomly drawn sensors, each fitted from its recording.
 
     python tools/bench_blind.py [--out bench-out/blind] [--budget 600] [--sessions room-s10 ...]
                                 [--fresh] [--jobs 2] [--ray ADDRESS] [--publish]

@@ -12,7 +12,7 @@ from davis_io.prepare import prepare_session
 from seenerf.errors import TrainingStopped
 from seenerf.model.config import FitConfig
 from seenerf.train.fit import FitResult, LogBook, fit_session, session_bins
-from seenerf.train.threads import limit_threads
+from seenerf.train.threads import choose_threads, limit_threads
 from seenerf.train.trainer import Trainer
 
 __all__ = ["SessionFit", "fit_kept_apart", "prepare_and_fit", "score_table"]
@@ -45,8 +45,10 @@ def prepare_and_fit(
     on_step: Callable[[Trainer], None] | None = None,
 ) -> FitResult:
     """Calibrate the sensor and estimate poses when missing, then fit (the budget counts both)."""
-    limit_threads(config.threads)
     book = LogBook(log)  # the calibration's and poses' lines go into the run's log.txt too
+    threads, why = choose_threads(config.threads)
+    limit_threads(threads)
+    book(why)
     spent_s = prepare_session(session_dir, session_bins(session_dir, config), book)
     return fit_session(
         session_dir,

@@ -7,11 +7,18 @@ with those threads about, 8.1 without.
 
 from __future__ import annotations
 
+import os
+import time
+from pathlib import Path
+
 import cv2
 import torch
 from threadpoolctl import threadpool_limits
 
-__all__ = ["limit_threads"]
+__all__ = ["busy_cores", "choose_threads", "limit_threads", "threads_for"]
+
+LOOK_S = 0.3
+"""How long the machine is watched to see how busy its cores are."""
 
 
 def limit_threads(count: int) -> None:
@@ -21,3 +28,49 @@ def limit_threads(count: int) -> None:
     torch.set_num_threads(count)
     threadpool_limits(limits=count)
     cv2.setNumThreads(count)
+
+
+def threads_for(cores: int, busy: float) -> int:
+    """Threads for a fit on ``cores`` cores of which ``busy`` (a fraction of cores) are in use.
+
+    A core counts as free when less than half of it is busy; at least one thread. On a shared
+    machine each thread more than the free cores only waits for a busy one, and the others wait
+    for it at every step.
+    """
+    return max(1, min(cores, cores - int(busy + 0.5)))
+
+
+def _cpu_times(stat: str) -> tuple[int, int]:
+    """``(busy, total)`` jiffies of all CPUs from ``/proc/stat``'s text."""
+    fields = [int(v) for v in stat.splitlines()[0].split()[1:]]
+    idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle and waiting for I/O
+    total = sum(fields[:8])  # guest time is counted inside user time already
+    return total - idle, total
+
+
+def busy_cores(look_s: float = LOOK_S, stat: Path = Path("/proc/stat")) -> float | None:
+    """How many cores' worth of work the machine did while watched, or None where unreadable."""
+    try:
+        busy0, total0 = _cpu_times(stat.read_text())
+        time.sleep(look_s)
+        busy1, total1 = _cpu_times(stat.read_text())
+    except (OSError, ValueError, IndexError):
+        return None
+    cores = os.cpu_count() or 1
+    return cores * (busy1 - busy0) / max(total1 - total0, 1)
+
+
+def choose_threads(requested: int) -> tuple[int, str]:
+    """The thread count of a fit and a line saying why.
+
+    ``requested`` > 0 is taken as given; 0 uses the cores this process may run on that other
+    work leaves free.
+    """
+    cores = len(os.sched_getaffinity(0))
+    if requested > 0:
+        return requested, f"threads: {requested} (as asked) on {cores} cores"
+    busy = busy_cores()
+    if busy is None:
+        return cores, f"threads: {cores}, one per core (how busy they are is unknown here)"
+    count = threads_for(cores, busy)
+    return count, f"threads: {count} of {cores} cores ({busy:.1f} cores busy with other work)"

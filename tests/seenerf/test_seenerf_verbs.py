@@ -114,9 +114,10 @@ def test_a_fits_log_holds_the_preparation_and_its_config_the_software(monkeypatc
     shown = []
     result = prepare_and_fit(tmp_path, config, log=shown.append)
     log = (result.run_dir / "log.txt").read_text().splitlines()
-    assert log[0].endswith("  measuring the sensor from the recording")
-    assert log[1].endswith("  estimating poses (b=2)") and "training fast full" in log[2]
-    assert shown[:2] == ["measuring the sensor from the recording", "estimating poses (b=2)"]
+    assert "  threads: " in log[0] and " cores" in log[0]  # chosen from the free cores
+    assert log[1].endswith("  measuring the sensor from the recording")
+    assert log[2].endswith("  estimating poses (b=2)") and "training fast full" in log[3]
+    assert shown[1:3] == ["measuring the sensor from the recording", "estimating poses (b=2)"]
     software = json.loads((result.run_dir / "config.json").read_text())["software"]
     assert software["device"] == "cpu" and software["torch"] == torch.__version__
     assert software["seecap"] and software["commit"]
