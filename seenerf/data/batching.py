@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import torch
 
@@ -26,6 +28,9 @@ class FrameSampler:
         subframes: sub-frames per bin of the exposure integral (:mod:`seenerf.data.subframes`).
         settled: batches carry where each pixel was settled (``data.settled``); False: every
             latent point counts as settled, so each bin is compared alone.
+        correction: ``correction(c2w, frame)`` gives a batch's poses as the fit refines them
+            (:class:`~seenerf.model.pose_correction.PoseCorrection`), or None for the poses
+            as given.
     """
 
     def __init__(
@@ -38,6 +43,7 @@ class FrameSampler:
         device: str = "cpu",
         subframes: int = 1,
         settled: bool = True,
+        correction: Callable[[torch.Tensor, torch.Tensor], torch.Tensor] | None = None,
     ):
         self.height, self.width = data.image_size
         self.frames = torch.as_tensor(frames, dtype=torch.long)
@@ -61,6 +67,7 @@ class FrameSampler:
         self.pool = torch.as_tensor(np.flatnonzero(allowed), dtype=torch.long)
         self.event_pool = torch.as_tensor(np.flatnonzero(allowed & active), dtype=torch.long)
         self.event_share = event_share if len(self.event_pool) else 0.0
+        self.correction = correction
 
     def sample(self, count: int, generator: torch.Generator) -> RayBatch:
         """``count`` random pixels of random training frames."""
@@ -88,6 +95,8 @@ class FrameSampler:
         v = torch.div(pixel, self.width, rounding_mode="floor")
         u = pixel % self.width
         c2w = self.c2w[frame]
+        if self.correction is not None:
+            c2w = self.correction(c2w, frame)
         poses = c2w.shape[1]
         origins, directions = camera_rays(
             c2w.reshape(-1, 4, 4),

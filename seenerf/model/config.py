@@ -99,6 +99,9 @@ class FitConfig:
             latent poses (:mod:`seenerf.data.subframes`); 1 is the published b+1 latent poses,
             more is for motion of many pixels per bin (the event model then follows each pixel
             through them).
+        refine_poses: learn a small rotation and translation of each training view's poses
+            with the field (:mod:`seenerf.model.pose_correction`); the test poses are then
+            mapped from the corrected cameras.
     """
 
     preset: str = DEFAULT_PRESET
@@ -126,6 +129,7 @@ class FitConfig:
     warm_steps: int = -1
     register_test_views: bool = True
     subframes: int = 1
+    refine_poses: bool = False
 
     def validate(self) -> FitConfig:
         """Check names and ranges; return self.
@@ -154,7 +158,7 @@ class FitConfig:
         for problem in problems:
             if problem is not None:
                 raise OptionError(problem)
-        for name in ("dead_time", "frame_noise", "register_test_views"):
+        for name in ("dead_time", "frame_noise", "register_test_views", "refine_poses"):
             if not isinstance(getattr(self, name), bool):
                 raise OptionError(f"{name} {getattr(self, name)!r} must be true or false")
         return self
@@ -179,6 +183,7 @@ class FitConfig:
             "event_share",
             "batch_pixels",
             "subframes",
+            "refine_poses",
         )
         return {name: getattr(self, name) for name in keep}
 

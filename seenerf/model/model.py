@@ -8,6 +8,7 @@ import torch
 from torch import nn
 
 from seenerf.model.imaging import RayBatch
+from seenerf.model.pose_correction import PoseCorrection
 from seenerf.model.variants import Variant
 from seenerf.render.renderer import RadianceRenderer
 from seenerf.sensors.event_crf import EventCrf, EventModelSpec
@@ -36,6 +37,8 @@ class SeeNerfModel(nn.Module):
         reference_exposure_s: exposure of the training frames (for the LDR-field variant).
         crf: the RGB response (built for the session: :func:`seenerf.train.builder.rgb_response`)
             or None; ``event_args``: keyword arguments of the event CRF.
+        pose_correction: the training views' learned pose corrections, or None when the
+            poses are taken as given.
     """
 
     def __init__(
@@ -48,6 +51,7 @@ class SeeNerfModel(nn.Module):
         reference_exposure_s: float,
         crf: nn.Module | None,
         event_args: dict,
+        pose_correction: PoseCorrection | None = None,
     ):
         super().__init__()
         self.renderer = renderer
@@ -56,6 +60,7 @@ class SeeNerfModel(nn.Module):
         self.reference_exposure_s = reference_exposure_s
         self.crf = crf
         self.event_crf = EventCrf(event_spec, **event_args) if event_spec is not None else None
+        self.pose_correction = pose_correction
 
     def warm_start(self, steps: int, seed: int) -> None:
         """Reference warm start of the response MLPs (before any training step)."""

@@ -14,6 +14,7 @@ from seenerf.data.frames import truth_to_fit_frame
 from seenerf.errors import ConfigError
 from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
+from seenerf.model.pose_correction import PoseCorrection
 from seenerf.model.presets import Preset, get_preset, size_field
 from seenerf.model.variants import LOW_PASS_READINGS, get_variant
 from seenerf.render.frustum import forward_facing_space, frustum_box
@@ -21,7 +22,13 @@ from seenerf.render.rays import in_any_view, scene_box_from_cameras
 from seenerf.render.renderer import RadianceRenderer
 from seenerf.sensors.rgb_crf import LinearCrf, RgbCrf, TabulatedCrf
 
-__all__ = ["build_model", "resolve_device", "rgb_response", "training_frame"]
+__all__ = [
+    "build_model",
+    "resolve_device",
+    "rgb_response",
+    "training_frame",
+    "with_refined_poses",
+]
 
 
 def resolve_device(name: str) -> str:
@@ -154,5 +161,15 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
             "dead_time_s": data.dead_time_s if config.dead_time else 0.0,
             "polarity_scale": data.polarity_scale,
         },
+        pose_correction=PoseCorrection(data.num_frames)
+        if config.refine_poses and not variant.supervision.truth_hdr
+        else None,
     )
     return model.to(device), preset
+
+
+def with_refined_poses(data: TrainingData, model: SeeNerfModel) -> TrainingData:
+    """The training data at the poses the fit refined (as it was when it refined none)."""
+    if model.pose_correction is None:
+        return data
+    return dataclasses.replace(data, c2w=model.pose_correction.apply(data.c2w))

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import torch
 
 from davis_io.errors import SeecapError
@@ -24,6 +25,7 @@ from seenerf.model.config import FitConfig, save_config
 from seenerf.model.variants import get_variant
 from seenerf.provenance import software
 from seenerf.sensors.rgb_crf import LinearCrf
+from seenerf.train.builder import with_refined_poses
 from seenerf.train.trainer import Trainer, TrainSummary
 
 __all__ = [
@@ -233,6 +235,7 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
             "was not finite"
         )
     training_curves(run_dir / "training.png", summary.history)
+    data, refined = _refined_poses(data, trainer.model, log)
     metrics = render_outputs(trainer.model, data, config, run_dir)
     metrics["training"] = {
         "steps": summary.steps,
@@ -245,6 +248,7 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         "history": summary.history,
         "seconds_before_training": spent_s,
         "latent_travel_px": travel_px,
+        **refined,
     }
     write_json(run_dir / "metrics.json", metrics)
     if is_session_run(run_dir):
@@ -253,3 +257,16 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         except (SeecapError, OSError) as error:  # the renders and scores stand without it
             log(f"report.html not written ({error}); `seecap report {run_dir}` retries")
     return FitResult(run_dir, summary, metrics)
+
+
+def _refined_poses(data: TrainingData, model, log: Callable[[str], None]) -> tuple:
+    """The data at the training poses the fit refined and how far each moved (logged too)."""
+    if model.pose_correction is None:
+        return data, {}
+    turned, moved = model.pose_correction.sizes()
+    log(
+        f"training poses refined: turned {np.median(turned):.3f} deg median "
+        f"({turned.max():.3f} largest), moved {np.median(moved):.4f} scene units median"
+    )
+    refined = {"poses_turned_deg": turned.tolist(), "poses_moved": moved.tolist()}
+    return with_refined_poses(data, model), refined

@@ -21,7 +21,7 @@ from seenerf.eval.views import render_views, write_views
 from seenerf.model.config import FitConfig, load_config
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.variants import get_variant
-from seenerf.train.builder import build_model, resolve_device
+from seenerf.train.builder import build_model, resolve_device, with_refined_poses
 from seenerf.train.checkpoint import load_model_state
 
 __all__ = ["OpenRun", "evaluate_run", "open_run", "orbit_poses", "read_path", "render_run"]
@@ -59,7 +59,7 @@ def open_run(run_dir: Path | str) -> OpenRun:
     )
     model, _ = build_model(data, config, resolve_device(config.device))
     load_model_state(run_dir / "checkpoint.pt", model)
-    return OpenRun(run_dir, model, data, config)
+    return OpenRun(run_dir, model, with_refined_poses(data, model), config)
 
 
 def orbit_poses(data: TrainingData, count: int = 60) -> np.ndarray:
