@@ -12,7 +12,7 @@ true change exceeds the threshold it prints the median ratio of the two, the lea
 of the event change on the true one (also for rises and falls apart), and their correlation. A
 ratio under 1 means the events undercount contrast.
 
-``--calibration`` reads the bins as a fit does instead (``Session.contrast_bins``: events in
+``--calibration`` reads the bins as a fit does instead (``contrast_bins``: events in
 light time, each weighing its pixel's threshold), with the session's measured calibration or the
 sensor's true values: what the fit's event loss is given. A slope under 1 with both is the
 pixel; under 1 with the measured values alone is the calibration (its latency, mostly).
@@ -38,7 +38,7 @@ import numpy as np
 
 from davis_io.emulator import EmulatedCamera
 from davis_io.emulator.dvs import lin_log
-from davis_io.session import DEFAULT_BINS, SensorCalibration, Session
+from davis_io.session import DEFAULT_BINS, SensorCalibration, Session, contrast_bins
 
 SCANNED_LATENCIES_MS = tuple(range(0, 17, 2))
 
@@ -77,7 +77,7 @@ def log_changes(
         bins = (
             session.bins(b)
             if calibration is None
-            else session.contrast_bins(b, calibration, settled=spans)
+            else contrast_bins(session, b, calibration, settled=spans)
         )
         sensor = session.truth().sensor
     camera = EmulatedCamera.of_session(session_dir)

@@ -24,6 +24,7 @@ from davis_io.session import (
     SensorCalibration,
     Session,
     SessionPoses,
+    contrast_bins,
     default_calibration,
     writer_lock,
 )
@@ -397,7 +398,7 @@ def _labelled(progress: Progress, label: str) -> Progress:
 
 
 def _reconstruct(session, b, label, calibration, folder, intrinsics, progress) -> _Trial:
-    bins = session.contrast_bins(b, calibration)
+    bins = contrast_bins(session, b, calibration)
     names, scores = _write_latent_frames(
         session, bins, calibrated_response(calibration), folder / "images", progress
     )

@@ -1,7 +1,8 @@
 """Session folders: manifest, reader and truth format (the recorder: ``session.recorder``).
 
 Also re-exported here, as the contract a trainer reads sessions by: the colour filter and its
-weights, the bins' sub-division and trapezoid weights, the shared defaults and durations.
+weights, the bins' sub-division and trapezoid weights, bins in light time, the shared defaults
+and durations.
 """
 
 from davis_io.bins import subdivide, trapezoid_weights
@@ -9,6 +10,7 @@ from davis_io.colorfilter import filter_weights
 from davis_io.session.bounds import Bounds
 from davis_io.session.calibration import SensorCalibration, default_calibration
 from davis_io.session.defaults import DEFAULT_BINS, DEFAULT_THRESHOLD
+from davis_io.session.light_bins import contrast_bins
 from davis_io.session.lock import SessionBusy, writer_lock
 from davis_io.session.manifest import DropCounters, SessionManifest, read_manifest
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
@@ -33,6 +35,7 @@ __all__ = [
     "SensorCalibration",
     "SessionBusy",
     "Truth",
+    "contrast_bins",
     "default_calibration",
     "filter_weights",
     "load_truth",

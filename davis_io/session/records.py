@@ -37,7 +37,8 @@ class SessionBins:
         calibrated: ``(F, b, H, W)`` float32 counts with the h() offsets, or with ``contrast``
             the ln intensity change of each bin (events weighted by their thresholds).
         event_count: ``(F,)`` int64 events inside each exposure window.
-        contrast: ``calibrated`` is in ln units (:meth:`Session.contrast_bins`), not counts.
+        contrast: ``calibrated`` is in ln units (:func:`~davis_io.session.contrast_bins`), not
+            counts.
         settled: ``(F, b+1, H, W)`` bool, whether each pixel had fired all it owed at each
             latent time point (:func:`davis_io.settled.settled_points`); None unless asked.
     """

@@ -41,7 +41,6 @@ from davis_io.session.manifest import (
 from davis_io.session.records import FramesTable, SessionBins, SessionPoses
 from davis_io.session.truth import TRUTH_DIR, Truth, load_truth
 from davis_io.session.writer import check_free_space, storage_errors
-from davis_io.settled import SLEWING_INTERVALS, settled_points
 from davis_io.types import (
     EVENT_DTYPE,
     IMU_DTYPE,
@@ -322,54 +321,6 @@ class Session(Closing):
         count = self.frame_count
         arrays = {name: group[name][:count] for name in _BINS_FIELDS}
         return SessionBins(b=int(b), **arrays)
-
-    def contrast_bins(
-        self, b: int, calibration: SensorCalibration, *, settled: bool = False
-    ) -> SessionBins:
-        """Bins for ``b`` in light time, whose ``contrast`` is the ln change of each bin.
-
-        Each exposure's events are cut ``calibration.latency_us`` later than the exposure (when
-        the events of its light come), each event weighs its pixel's calibrated threshold, and
-        the latent time points are moved back onto the exposure's clock. With ``settled`` the
-        bins mark the points where a pixel was not firing at its dead-time limit (read from
-        events two dead times beyond the exposure). Computed, not stored.
-
-        Raises:
-            SessionError: bad ``b``.
-        """
-        if int(b) != b or b < 1:
-            raise SessionError(f"number of bins {b!r} must be a whole number >= 1")
-        table, latency = self.frames_table(), int(calibration.latency_us)
-        shape, pixels = (self.height, self.width), self.height * self.width
-        sizes = []
-        for threshold, factors in (
-            (calibration.threshold_on, calibration.pixel_factor_on),
-            (calibration.threshold_off, calibration.pixel_factor_off),
-        ):
-            factors = factors if factors.shape == shape else np.ones(shape)
-            sizes.append(threshold * np.asarray(factors, np.float64).reshape(pixels))
-        rows, points = [], []
-        dead_time = calibration.dead_time_us
-        margin = int(np.ceil(SLEWING_INTERVALS * dead_time)) if settled else 0
-        for start_us, end_us in zip(table.exposure_start_us, table.exposure_end_us, strict=True):
-            start, end = int(start_us) + latency, int(end_us) + latency
-            window = self.events_between(start - margin, end + margin)
-            row = bin_exposure(window, start, end, b, self.width, self.height, tuple(sizes))
-            rows.append(row)
-            if settled:
-                points.append(
-                    settled_points(window, row.split_us, self.width, self.height, dead_time)
-                )
-        return SessionBins(
-            b=int(b),
-            split_us=np.stack([row.split_us for row in rows]) - latency,
-            weights=np.stack([row.weights for row in rows]),
-            raw=np.stack([row.raw for row in rows]),
-            calibrated=np.stack([row.calibrated for row in rows]),
-            event_count=np.array([row.event_count for row in rows], np.int64),
-            contrast=True,
-            settled=np.stack(points) if settled else None,
-        )
 
     def poses(self, b: int) -> SessionPoses | None:
         """Poses stored for ``b``, or None when none were estimated yet."""

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from davis_io.geometry import interpolate_poses
-from davis_io.session import SensorCalibration, Session, SessionPoses, Truth
+from davis_io.session import SensorCalibration, Session, SessionPoses, Truth, contrast_bins
 from seenerf.data.arrays import TestViews, TrainingData, TrainTruth, pixel_layout
 from seenerf.errors import TrainingDataError
 
@@ -57,7 +57,7 @@ def load_training_data(
     """Frames, event bins and poses of a session as float32 training arrays.
 
     The bins are the session's events in light time, weighted by their pixels' calibrated
-    thresholds (:meth:`~davis_io.session.Session.contrast_bins`), in units of the mean
+    thresholds (:func:`~davis_io.session.contrast_bins`), in units of the mean
     threshold; the poses are moved to their latent time points.
 
     Args:
@@ -80,7 +80,7 @@ def load_training_data(
             )
         calibration = _calibration(session, sensor_from_truth, threshold)
         table = session.frames_table()
-        bins = session.contrast_bins(b, calibration, settled=True)
+        bins = contrast_bins(session, b, calibration, settled=True)
         c2w = _poses_at(poses, session.bins(b).split_us, bins.split_us)
         usable = np.flatnonzero(keep_lost | ~np.asarray(table.events_lost, bool))
         if len(usable) == 0 and len(table.events_lost):
