@@ -1,40 +1,25 @@
-"""Training losses: LDR (eq. 13), events (eq. 14), their sum (eq. 15) and the oracle's HDR loss."""
+"""Training losses: LDR (eq. 13), events (eq. 14) and the oracle's HDR loss.
+
+A method (:mod:`seenerf.train.methods`) weighs and sums them (eq. 15).
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import torch
 
 __all__ = [
     "NOISE_REFERENCE",
-    "LossWeights",
     "event_loss",
     "hdr_tone_map",
     "ldr_loss",
     "noise_even",
     "oracle_hdr_loss",
-    "total_loss",
 ]
 
 NOISE_REFERENCE = 0.25
 """Value above black where :func:`noise_even` keeps the plain squared error's weight."""
-
-
-@dataclass(frozen=True)
-class LossWeights:
-    """Weights of the loss terms.
-
-    Attributes:
-        events: lambda of eq. 15 (0.005).
-        anchor: weight of the CRF anchor term (0.5).
-        smoothness: weight of the field's total-variation term.
-    """
-
-    events: float = 0.005
-    anchor: float = 0.5
-    smoothness: float = 0.0
 
 
 def ldr_loss(predicted: torch.Tensor, recorded: torch.Tensor) -> torch.Tensor:
@@ -102,14 +87,3 @@ def oracle_hdr_loss(
     """MSE of tone-mapped rendered and true sharp HDR (the oracle's supervision)."""
     predicted = hdr_tone_map(torch.exp(log_radiance.clamp(max=60.0)), scale)
     return (predicted - hdr_tone_map(truth_hdr, scale)).square().mean()
-
-
-def total_loss(
-    ldr: torch.Tensor,
-    events: torch.Tensor,
-    anchor: torch.Tensor,
-    smoothness: torch.Tensor,
-    weights: LossWeights,
-) -> torch.Tensor:
-    """``L_ldr + lambda L_evs + w_anchor L_anchor + w_tv L_tv`` (eq. 15 + the reference anchor)."""
-    return ldr + weights.events * events + weights.anchor * anchor + weights.smoothness * smoothness

@@ -2,34 +2,21 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 import torch
 
 from seenerf.data.arrays import TrainingData
-from seenerf.data.batching import FrameSampler, OracleSampler
 from seenerf.errors import TrainingDataError, TrainingStopped
-from seenerf.eval.metrics import psnr
 from seenerf.model.config import FitConfig
 from seenerf.model.pose_correction import LEARNING_RATE as POSE_LEARNING_RATE
-from seenerf.model.pose_correction import PRIOR_WEIGHT as POSE_PRIOR_WEIGHT
 from seenerf.train.builder import build_model, resolve_device
 from seenerf.train.checkpoint import load_checkpoint, save_checkpoint
-from seenerf.train.losses import (
-    LossWeights,
-    event_loss,
-    hdr_tone_map,
-    ldr_loss,
-    noise_even,
-    oracle_hdr_loss,
-    total_loss,
-)
+from seenerf.train.methods import make_method, merged_preset
 from seenerf.train.stopping import StopRequest, stop_requests
 from seenerf.train.threads import limit_threads
 
@@ -57,18 +44,6 @@ PLATEAU_FROM_PROGRESS = 0.5
 """Share of the run (steps or budget) before a plateau may stop it: a 10-minute fit of the
 emulated room stopped at 44 % with the rate still 2.5x its final value (5,000 steps; the held-out
 score had not gained 0.05 dB in 8 evaluations while it wobbled)."""
-
-
-def frame_scale(data: TrainingData, config: FitConfig) -> Callable[[torch.Tensor], torch.Tensor]:
-    """The scale frame values are compared on.
-
-    Noise-even (:func:`~seenerf.train.losses.noise_even`) for linear frames whose noise was
-    measured, unless ``config.frame_noise`` is off; else the values themselves.
-    """
-    if not config.frame_noise or data.linear_levels is None or data.noise_offset <= 0:
-        return lambda values: values
-    black, offset = data.linear_levels[0], data.noise_offset
-    return lambda values: noise_even(values, black, offset)
 
 
 @dataclass
@@ -140,23 +115,14 @@ class Trainer:
         self.device = resolve_device(config.device)
         torch.manual_seed(config.seed)
         self.model, preset = build_model(data, config, self.device)
-        self.preset = dataclasses.replace(
-            preset,
-            pixels_per_step=config.batch_pixels or preset.pixels_per_step,
-            warm_steps=preset.warm_steps if config.warm_steps < 0 else config.warm_steps,
-            event_weight=config.event_weight or preset.event_weight,
-        )
+        self.preset = merged_preset(preset, config)
         self.generator = torch.Generator().manual_seed(config.seed)
         # A budget alone runs until it is spent or the held-out score stops rising (a plateau),
         # not to the preset's step count: that count only sets how far the rate falls.
         budgeted = config.time_budget_s > 0
         self.total_steps = config.steps or (math.inf if budgeted else self.preset.steps)
         self.spent_s = spent_s
-        self.weights = LossWeights(
-            self.preset.event_weight, config.anchor_weight, self.preset.smoothness
-        )
-        self.frame_scale = frame_scale(data, config)
-        self._make_samplers()
+        self.method = make_method(self.model, data, config, self.preset, self.device)
         field_params = list(self.model.renderer.parameters())
         sensor_params = [
             p
@@ -177,29 +143,6 @@ class Trainer:
         self.last_step_skipped = False
         self.outputs_s = 0.0
         """Seconds kept from the budget for the renders and scores after training."""
-
-    def _make_samplers(self) -> None:
-        data, rng = self.data, np.random.default_rng(self.config.seed)
-        frames = np.arange(data.num_frames)
-        pixels = data.image_size[0] * data.image_size[1]
-        count = int(round(self.config.validation_share * len(frames) * pixels))
-        self.validation = torch.as_tensor(np.sort(rng.choice(len(frames) * pixels, count, False)))
-        events = self.model.variant.events
-        self.frames = FrameSampler(
-            data,
-            frames,
-            self.config.event_share,
-            events is None or events.calibrated,
-            self.validation.numpy(),
-            self.device,
-            self.config.subframes,
-            self.config.dead_time,
-            self.model.pose_correction,
-        )
-        self.oracle = None
-        if self.model.variant.supervision.truth_hdr:
-            truth = data.truth
-            self.oracle = OracleSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, self.device)
 
     def train(self) -> TrainSummary:
         """Run (or resume) training until the step count, the time budget or a plateau.
@@ -286,7 +229,7 @@ class Trainer:
         Each held-out view is rendered, registered against its image and rendered again
         (:data:`OUTPUT_RENDERS_PER_VIEW` renders' worth), plus :data:`OUTPUT_FIXED_S`.
         """
-        rays = len(self.validation) * (self.data.num_bins * self.config.subframes + 1)
+        rays = len(self.method.validation) * (self.data.num_bins * self.config.subframes + 1)
         if rays == 0 or validation_s <= 0:
             return
         height, width = self.data.image_size
@@ -319,57 +262,18 @@ class Trainer:
             and step % self.preset.grid_every == 0
         ):
             self.model.renderer.grid.update(self.model.renderer.density, self.generator)
-        loss, terms, rays, samples = self._loss()
+        step_terms = self.method.step(self.generator)
+        loss = step_terms.loss()
         self.optimizer.zero_grad(set_to_none=True)
         self.last_step_skipped = not bool(torch.isfinite(loss))
         if self.last_step_skipped:
             self.summary.skipped_steps += 1
-            return rays
+            return step_terms.rays
         loss.backward()
         self.optimizer.step()
-        self.summary.samples_per_ray = samples / max(rays, 1)
-        self.last_terms = terms
-        return rays
-
-    def _loss(self) -> tuple[torch.Tensor, dict, int, int]:
-        model, zero = self.model, torch.zeros((), device=self.device)
-        smooth_fn = getattr(model.renderer.fields[0], "smoothness", None)
-        smooth = smooth_fn() if smooth_fn is not None and self.weights.smoothness > 0 else zero
-        if self.oracle is not None:
-            origins, directions, hdr = self.oracle.sample(
-                self.preset.pixels_per_step * (self.data.num_bins + 1), self.generator
-            )
-            passes = model.renderer(
-                origins, directions, model.near, model.far, None, self.generator
-            )
-            ldr = sum(oracle_hdr_loss(p.values, hdr, self.oracle.scale) for p in passes)
-            loss = total_loss(ldr, zero, zero, smooth, self.weights)
-            return loss, {"hdr": float(ldr.detach())}, len(origins), passes[-1].num_samples
-        batch = self.frames.sample(self.preset.pixels_per_step, self.generator)
-        predictions = model(batch, self.generator)
-        recorded = self.frame_scale(batch.ldr)
-        ldr = sum(ldr_loss(self.frame_scale(p.ldr), recorded) for p in predictions)
-        events = sum(
-            (
-                event_loss(p.counts, batch.bins, batch.settled)
-                for p in predictions
-                if p.counts is not None
-            ),
-            zero,
-        )
-        anchor = model.crf.anchor_loss() if model.crf is not None else zero
-        loss = total_loss(ldr, events, anchor, smooth, self.weights)
-        rays = batch.origins.shape[0] * batch.origins.shape[1]
-        terms = {
-            "ldr": float(ldr.detach()),
-            "events": float(events.detach()),
-            "anchor": float(anchor.detach()),
-        }
-        if model.pose_correction is not None:
-            prior = model.pose_correction.prior()
-            loss = loss + POSE_PRIOR_WEIGHT * prior
-            terms["poses"] = float(prior.detach())
-        return loss, terms, rays, predictions[-1].num_samples
+        self.summary.samples_per_ray = step_terms.samples / max(step_terms.rays, 1)
+        self.last_terms = step_terms.shown()
+        return step_terms.rays
 
     def progress(self) -> float:
         """How far the run is, 0 to 1: the larger of its share of the steps and of the budget.
@@ -399,41 +303,9 @@ class Trainer:
         for group, base in zip(self.optimizer.param_groups, self.base_rates, strict=True):
             group["lr"] = base * factor
 
-    @torch.no_grad()
     def validation_psnr(self) -> float:
-        """LDR PSNR of the held-out training pixels (blurry reproduction), dB.
-
-        For the oracle: tone-mapped HDR PSNR of the same pixel indices in its sharp truth images.
-        """
-        if len(self.validation) == 0:
-            return math.nan
-        if self.oracle is not None:
-            return self._oracle_validation_psnr()
-        predicted = []
-        for chunk in self.validation.split(2048):
-            batch = self.frames.batch_flat(chunk)
-            predicted.append((self.model(batch)[-1].ldr.cpu(), batch.ldr.cpu()))
-        return psnr(
-            torch.cat([p for p, _ in predicted]).numpy(),
-            torch.cat([t for _, t in predicted]).numpy(),
-        )
-
-    def _oracle_validation_psnr(self) -> float:
-        pairs = []
-        total = self.oracle.hdr.shape[0] * self.oracle.hdr.shape[1] * self.oracle.hdr.shape[2]
-        for chunk in (self.validation % total).split(2048):
-            origins, directions, hdr = self.oracle.pixels(chunk.to(self.oracle.hdr.device))
-            log_radiance = self.model.render_log_radiance(origins, directions)
-            pairs.append(
-                (
-                    hdr_tone_map(torch.exp(log_radiance.clamp(max=60.0)), self.oracle.scale),
-                    hdr_tone_map(hdr, self.oracle.scale),
-                )
-            )
-        return psnr(
-            torch.cat([p for p, _ in pairs]).cpu().numpy(),
-            torch.cat([t for _, t in pairs]).cpu().numpy(),
-        )
+        """The method's held-out score, dB (the blurry frames' LDR PSNR for a recording)."""
+        return self.method.validation_psnr()
 
     def _evaluate(self, start_step: int, start: float) -> bool:
         began = time.perf_counter()

@@ -12,7 +12,8 @@ from seenerf.train.trainer import Trainer
 def _check(scene, **overrides):
     config = FitConfig(steps=2, batch_pixels=16, warm_steps=0, validation_share=0.0, **overrides)
     trainer = Trainer(scene, config, log=lambda line: None)
-    loss, terms, _, _ = trainer._loss()
+    step = trainer.method.step(trainer.generator)
+    loss, terms = step.loss(), step.shown()
     loss.backward()
     grads = [p.grad for p in trainer.model.parameters() if p.grad is not None]
     assert torch.isfinite(loss), terms
@@ -62,13 +63,13 @@ def test_no_events_at_all_in_the_session():
     scene.bins[:] = 0.0
     scene.bins_raw[:] = 0.0
     trainer = _check(scene)
-    assert trainer.frames.event_share == 0.0
+    assert trainer.method.frames.event_share == 0.0
 
 
 @pytest.mark.parametrize("bins", [1, 8])
 def test_one_and_eight_bins(bins):
     trainer = _check(_scene(b=bins))
-    assert trainer.frames.sample(4, torch.Generator().manual_seed(0)).bins.shape == (4, bins)
+    assert trainer.method.frames.sample(4, torch.Generator().manual_seed(0)).bins.shape == (4, bins)
 
 
 def test_very_large_event_counts():
@@ -98,22 +99,32 @@ def test_other_imaging_models_survive_saturation(variant):
     _check(scene, variant=variant)
 
 
+def _with_nan(step):
+    from seenerf.train.methods import LossTerm, Step
+
+    return Step([*step.terms, LossTerm("nan", 1.0, torch.tensor(float("nan")))], step.rays, 1)
+
+
+def _wrap_steps(monkeypatch, trainer, change):
+    """Each step of ``trainer`` as ``change`` makes it from the real one."""
+    real_step = trainer.method.step
+    monkeypatch.setattr(trainer.method, "step", lambda generator: change(real_step(generator)))
+
+
 def test_a_fit_whose_every_loss_is_nan_fails_instead_of_reporting_success(monkeypatch):
     from seenerf.errors import TrainingDataError
     from seenerf.train.trainer import SKIPPED_IN_A_ROW_LIMIT
 
     config = FitConfig(steps=200, batch_pixels=16, warm_steps=0, validation_share=0.0)
     trainer = Trainer(_scene(), config, log=lambda line: None)
-    real_loss = trainer._loss
     calls = []
 
-    def sometimes_nan():
-        loss, terms, rays, samples = real_loss()
+    def sometimes_nan(step):
         calls.append(1)
         # Steps 1-10 finite, then NaN for ever: the limit counts from step 11.
-        return (loss if len(calls) <= 10 else loss * float("nan")), terms, rays, samples
+        return step if len(calls) <= 10 else _with_nan(step)
 
-    monkeypatch.setattr(trainer, "_loss", sometimes_nan)
+    _wrap_steps(monkeypatch, trainer, sometimes_nan)
     with pytest.raises(TrainingDataError, match=f"not finite in {SKIPPED_IN_A_ROW_LIMIT} steps"):
         trainer.train()
     assert trainer.summary.steps == 10 + SKIPPED_IN_A_ROW_LIMIT
@@ -123,14 +134,12 @@ def test_a_fit_whose_every_loss_is_nan_fails_instead_of_reporting_success(monkey
 def test_isolated_nan_steps_are_skipped_and_counted(monkeypatch):
     config = FitConfig(steps=30, batch_pixels=16, warm_steps=0, validation_share=0.0)
     trainer = Trainer(_scene(), config, log=lambda line: None)
-    real_loss = trainer._loss
     calls = []
 
-    def every_third_nan():
-        loss, terms, rays, samples = real_loss()
+    def every_third_nan(step):
         calls.append(1)
-        return (loss * float("nan") if len(calls) % 3 == 0 else loss), terms, rays, samples
+        return _with_nan(step) if len(calls) % 3 == 0 else step
 
-    monkeypatch.setattr(trainer, "_loss", every_third_nan)
+    _wrap_steps(monkeypatch, trainer, every_third_nan)
     summary = trainer.train()
     assert summary.steps == 30 and summary.skipped_steps == 10

@@ -113,7 +113,7 @@ def test_a_fit_with_subframes_predicts_b_counts_and_trains():
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
     config = FitConfig(steps=3, batch_pixels=16, warm_steps=0, validation_share=0.0, subframes=2)
     trainer = Trainer(scene, config, log=lambda line: None)
-    batch = trainer.frames.sample(4, torch.Generator().manual_seed(0))
+    batch = trainer.method.frames.sample(4, torch.Generator().manual_seed(0))
     assert batch.origins.shape[1] == 5
     assert trainer.model(batch)[-1].counts.shape == (4, 2)
     summary = trainer.train()

@@ -11,7 +11,8 @@ from seenerf.model.presets import PRESETS, size_field
 from seenerf.model.variants import VARIANTS
 from seenerf.train.builder import build_model
 from seenerf.train.losses import NOISE_REFERENCE, event_loss, noise_even
-from seenerf.train.trainer import Trainer, frame_scale
+from seenerf.train.methods import frame_scale
+from seenerf.train.trainer import Trainer
 
 
 def _config(**overrides):
@@ -23,14 +24,6 @@ def _config(**overrides):
 def _parameters_changed(trainer, before):
     after = [p.detach().clone() for p in trainer.model.parameters()]
     return any(not torch.equal(a, b) for a, b in zip(before, after, strict=True))
-
-
-def _finite_step(trainer):
-    loss, terms, _, _ = trainer._loss()
-    loss.backward()
-    grads = [p.grad for p in trainer.model.parameters() if p.grad is not None]
-    trainer.optimizer.zero_grad()
-    return torch.isfinite(loss) and all(torch.isfinite(g).all() for g in grads), terms
 
 
 @pytest.mark.parametrize("preset", sorted(PRESETS))
@@ -58,7 +51,7 @@ def test_every_variant_trains_a_few_steps(variant, tiny_scene):
 def test_the_event_weight_is_the_presets_unless_one_is_stated(preset, stated, used, tiny_scene):
     config = _config(preset=preset, event_weight=stated)
     trainer = Trainer(tiny_scene, config, log=lambda line: None)
-    assert trainer.weights.events == used
+    assert trainer.preset.event_weight == used
     with pytest.raises(ConfigError, match="--event-weight -0.1 is out of range"):
         FitConfig(event_weight=-0.1).validate()
 
@@ -370,7 +363,7 @@ def test_the_budget_keeps_room_for_the_renders_and_scores_after_training(tiny_sc
     )
     assert trainer._training_budget() == 40.0  # nothing kept before the first validation
     height, width = tiny_scene.image_size
-    rays = len(trainer.validation) * (tiny_scene.num_bins + 1)
+    rays = len(trainer.method.validation) * (tiny_scene.num_bins + 1)
     trainer._estimate_outputs(validation_s=0.5)
     # A view's rays at the validation's speed, six renders' worth per held-out view.
     per_view = height * width * 0.5 / rays

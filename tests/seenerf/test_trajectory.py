@@ -11,7 +11,7 @@ from trajectory import FITS, FIXTURE, trajectory
 def test_a_short_fit_keeps_its_loss_trajectory(name):
     expected = json.loads(FIXTURE.read_text())[name]
     got = trajectory(FITS[name])
-    assert [sorted(step) for step in got] == [sorted(step) for step in expected]
+    assert len(got) == len(expected)  # the log may show more terms; those it showed stay
     for step, (ours, theirs) in enumerate(zip(got, expected, strict=True)):
         for term, value in theirs.items():
             assert ours[term] == pytest.approx(value, rel=1e-5, abs=1e-9), (step, term)

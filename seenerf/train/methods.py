@@ -1,0 +1,252 @@
+"""What differs between variants, resolved once at the start of a fit into a method.
+
+A method owns what it trains on (the recorded frames and events at the estimated poses, or the
+truth's sharp HDR at the true poses), its batches, its loss terms, each with its weight and its
+name in the log, and its held-out score. The training loop (:mod:`seenerf.train.trainer`) asks
+a method for the terms of a step and its score, and never which variant it serves.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from seenerf.data.arrays import TrainingData
+from seenerf.data.batching import FrameSampler, OracleSampler
+from seenerf.eval.metrics import psnr
+from seenerf.model.config import FitConfig
+from seenerf.model.model import SeeNerfModel
+from seenerf.model.pose_correction import PRIOR_WEIGHT as POSE_PRIOR_WEIGHT
+from seenerf.model.presets import Preset
+from seenerf.train.losses import (
+    event_loss,
+    hdr_tone_map,
+    ldr_loss,
+    noise_even,
+    oracle_hdr_loss,
+)
+
+__all__ = [
+    "LossTerm",
+    "Method",
+    "RecordingMethod",
+    "SharpTruthMethod",
+    "Step",
+    "frame_scale",
+    "make_method",
+    "merged_preset",
+]
+
+VALIDATION_CHUNK = 2048
+"""Held-out pixels rendered at once."""
+
+
+@dataclass(frozen=True)
+class LossTerm:
+    """One term of a step's loss: the loss adds ``weight * value``; the log shows ``value``."""
+
+    name: str
+    weight: float
+    value: torch.Tensor
+
+
+@dataclass(frozen=True)
+class Step:
+    """A step's loss terms and what it rendered (rays, and field samples per ray's last pass)."""
+
+    terms: list[LossTerm]
+    rays: int
+    samples: int
+
+    def loss(self) -> torch.Tensor:
+        """The weighted sum of the terms, in their order."""
+        total = self.terms[0].weight * self.terms[0].value
+        for term in self.terms[1:]:
+            total = total + term.weight * term.value
+        return total
+
+    def shown(self) -> dict[str, float]:
+        """Each term's value by name, for the log."""
+        return {term.name: float(term.value.detach()) for term in self.terms}
+
+
+def merged_preset(preset: Preset, config: FitConfig) -> Preset:
+    """The preset with the values the configuration states instead of its own."""
+    return dataclasses.replace(
+        preset,
+        pixels_per_step=config.batch_pixels or preset.pixels_per_step,
+        warm_steps=preset.warm_steps if config.warm_steps < 0 else config.warm_steps,
+        event_weight=config.event_weight or preset.event_weight,
+    )
+
+
+def frame_scale(data: TrainingData, config: FitConfig) -> Callable[[torch.Tensor], torch.Tensor]:
+    """The scale frame values are compared on.
+
+    Noise-even (:func:`~seenerf.train.losses.noise_even`) for linear frames whose noise was
+    measured, unless ``config.frame_noise`` is off; else the values themselves.
+    """
+    if not config.frame_noise or data.linear_levels is None or data.noise_offset <= 0:
+        return lambda values: values
+    black, offset = data.linear_levels[0], data.noise_offset
+    return lambda values: noise_even(values, black, offset)
+
+
+class Method:
+    """The part of a fit that depends on its variant.
+
+    Args:
+        model: the model being trained.
+        data: the training arrays.
+        config: the fit configuration.
+        preset: the merged preset (:func:`merged_preset`).
+        device: torch device.
+
+    Attributes:
+        validation: flat indices ``frame * H * W + pixel`` of the held-out training pixels
+            (drawn at the configuration's seed, never trained on).
+    """
+
+    def __init__(
+        self,
+        model: SeeNerfModel,
+        data: TrainingData,
+        config: FitConfig,
+        preset: Preset,
+        device: str,
+    ):
+        self.model, self.data, self.config, self.preset = model, data, config, preset
+        rng = np.random.default_rng(config.seed)
+        pixels = data.image_size[0] * data.image_size[1]
+        count = int(round(config.validation_share * data.num_frames * pixels))
+        chosen = rng.choice(data.num_frames * pixels, count, False)
+        self.validation = torch.as_tensor(np.sort(chosen))
+
+    def step(self, generator: torch.Generator) -> Step:
+        """The loss terms of one random batch."""
+        raise NotImplementedError
+
+    def validation_psnr(self) -> float:
+        """The held-out score, dB (nan without held-out pixels)."""
+        raise NotImplementedError
+
+    def _smoothness(self) -> list[LossTerm]:
+        """The field's total variation, where the preset weighs it and the field has one."""
+        smoothness = getattr(self.model.renderer.fields[0], "smoothness", None)
+        if smoothness is None or self.preset.smoothness <= 0:
+            return []
+        return [LossTerm("smoothness", self.preset.smoothness, smoothness())]
+
+
+class RecordingMethod(Method):
+    """Trains on the recorded blurry frames and their events, at the estimated poses.
+
+    The terms: the frames' LDR error (eq. 15), the events' (weighted by the preset's lambda),
+    the response's anchor, the field's smoothness, and the prior of refined poses.
+    """
+
+    def __init__(self, model, data, config, preset, device):
+        super().__init__(model, data, config, preset, device)
+        events = model.variant.events
+        self.frames = FrameSampler(
+            data,
+            np.arange(data.num_frames),
+            config.event_share,
+            events is None or events.calibrated,
+            self.validation.numpy(),
+            device,
+            config.subframes,
+            config.dead_time,
+            model.pose_correction,
+        )
+        self.scale = frame_scale(data, config)
+        self.zero = torch.zeros((), device=device)
+
+    def step(self, generator: torch.Generator) -> Step:
+        """The loss terms of a batch of recorded pixels."""
+        model = self.model
+        batch = self.frames.sample(self.preset.pixels_per_step, generator)
+        predictions = model(batch, generator)
+        recorded = self.scale(batch.ldr)
+        ldr = sum(ldr_loss(self.scale(p.ldr), recorded) for p in predictions)
+        events = sum(
+            (
+                event_loss(p.counts, batch.bins, batch.settled)
+                for p in predictions
+                if p.counts is not None
+            ),
+            self.zero,
+        )
+        anchor = model.crf.anchor_loss() if model.crf is not None else self.zero
+        terms = [
+            LossTerm("ldr", 1.0, ldr),
+            LossTerm("events", self.preset.event_weight, events),
+            LossTerm("anchor", self.config.anchor_weight, anchor),
+            *self._smoothness(),
+        ]
+        if model.pose_correction is not None:
+            terms.append(LossTerm("poses", POSE_PRIOR_WEIGHT, model.pose_correction.prior()))
+        rays = batch.origins.shape[0] * batch.origins.shape[1]
+        return Step(terms, rays, predictions[-1].num_samples)
+
+    @torch.no_grad()
+    def validation_psnr(self) -> float:
+        """LDR PSNR of the held-out training pixels (the blurry frames reproduced), dB."""
+        if len(self.validation) == 0:
+            return math.nan
+        predicted, recorded = [], []
+        for chunk in self.validation.split(VALIDATION_CHUNK):
+            batch = self.frames.batch_flat(chunk)
+            predicted.append(self.model(batch)[-1].ldr.cpu())
+            recorded.append(batch.ldr.cpu())
+        return psnr(torch.cat(predicted).numpy(), torch.cat(recorded).numpy())
+
+
+class SharpTruthMethod(Method):
+    """The oracle: trains on the truth's sharp linear HDR at the true poses.
+
+    The terms: the tone-mapped HDR error and the field's smoothness.
+    """
+
+    def __init__(self, model, data, config, preset, device):
+        super().__init__(model, data, config, preset, device)
+        truth = data.truth
+        self.truth = OracleSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, device)
+
+    def step(self, generator: torch.Generator) -> Step:
+        """The loss terms of a batch of sharp truth pixels."""
+        count = self.preset.pixels_per_step * (self.data.num_bins + 1)
+        origins, directions, hdr = self.truth.sample(count, generator)
+        model = self.model
+        passes = model.renderer(origins, directions, model.near, model.far, None, generator)
+        error = sum(oracle_hdr_loss(p.values, hdr, self.truth.scale) for p in passes)
+        terms = [LossTerm("hdr", 1.0, error), *self._smoothness()]
+        return Step(terms, len(origins), passes[-1].num_samples)
+
+    @torch.no_grad()
+    def validation_psnr(self) -> float:
+        """Tone-mapped HDR PSNR of the held-out pixel indices in the sharp truth images, dB."""
+        if len(self.validation) == 0:
+            return math.nan
+        images, height, width = self.truth.hdr.shape[:3]
+        predicted, true = [], []
+        for chunk in (self.validation % (images * height * width)).split(VALIDATION_CHUNK):
+            origins, directions, hdr = self.truth.pixels(chunk.to(self.truth.hdr.device))
+            log_radiance = self.model.render_log_radiance(origins, directions)
+            radiance = torch.exp(log_radiance.clamp(max=60.0))
+            predicted.append(hdr_tone_map(radiance, self.truth.scale))
+            true.append(hdr_tone_map(hdr, self.truth.scale))
+        return psnr(torch.cat(predicted).cpu().numpy(), torch.cat(true).cpu().numpy())
+
+
+def make_method(
+    model: SeeNerfModel, data: TrainingData, config: FitConfig, preset: Preset, device: str
+) -> Method:
+    """The method of the model's variant, by what the variant supervises."""
+    kind = SharpTruthMethod if model.variant.supervision.truth_hdr else RecordingMethod
+    return kind(model, data, config, preset, device)
