@@ -36,7 +36,7 @@ def render_outputs(
     views scored again there: a labelled extra (``test_poses.registered_scores``), never the
     headline.
     """
-    poses, similarity = test_poses_in_fit_frame(data, model.variant.supervision.truth_hdr)
+    poses, similarity = test_poses_in_fit_frame(data, model.in_truth_frame)
     exposures = bracket_exposures(config, data)
     views = render_views(model, poses, data.intrinsics, data.image_size, exposures, data.monochrome)
     write_views(

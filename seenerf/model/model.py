@@ -39,6 +39,8 @@ class SeeNerfModel(nn.Module):
             or None; ``event_args``: keyword arguments of the event CRF.
         pose_correction: the training views' learned pose corrections, or None when the
             poses are taken as given.
+        in_truth_frame: the field was trained in the truth's frame (at its poses), so test
+            poses need no mapping from the training cameras.
     """
 
     def __init__(
@@ -52,6 +54,7 @@ class SeeNerfModel(nn.Module):
         crf: nn.Module | None,
         event_args: dict,
         pose_correction: PoseCorrection | None = None,
+        in_truth_frame: bool = False,
     ):
         super().__init__()
         self.renderer = renderer
@@ -61,6 +64,7 @@ class SeeNerfModel(nn.Module):
         self.crf = crf
         self.event_crf = EventCrf(event_spec, **event_args) if event_spec is not None else None
         self.pose_correction = pose_correction
+        self.in_truth_frame = in_truth_frame
 
     def warm_start(self, steps: int, seed: int) -> None:
         """Reference warm start of the response MLPs (before any training step)."""

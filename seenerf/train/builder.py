@@ -10,7 +10,6 @@ import torch
 from torch import nn
 
 from seenerf.data.arrays import TrainingData
-from seenerf.data.frames import truth_to_fit_frame
 from seenerf.errors import ConfigError
 from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
@@ -21,12 +20,12 @@ from seenerf.render.frustum import forward_facing_space, frustum_box
 from seenerf.render.rays import in_any_view, scene_box_from_cameras
 from seenerf.render.renderer import RadianceRenderer
 from seenerf.sensors.rgb_crf import LinearCrf, RgbCrf, TabulatedCrf
+from seenerf.train.methods import method_class
 
 __all__ = [
     "build_model",
     "resolve_device",
     "rgb_response",
-    "training_frame",
     "with_refined_poses",
 ]
 
@@ -82,35 +81,11 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
     return crf(**anchor)
 
 
-def training_frame(data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Poses the field is trained at and the scene's near / far depth in their frame.
-
-    The estimated latent poses and their bounds, or for the oracle the truth's poses with the
-    bounds rescaled into the truth's frame (estimated poses are known up to a similarity).
-
-    Raises:
-        ConfigError: the oracle needs truth, the multi-exposure variant several exposures.
-    """
-    supervision = get_variant(config.variant).supervision
-    if supervision.truth_hdr:
-        if data.truth is None:
-            raise ConfigError(
-                f"variant {config.variant} needs ground truth (an emulated session with truth/)"
-            )
-        scale = truth_to_fit_frame(data).scale
-        return data.truth.c2w, (np.asarray(data.bounds, np.float64) / scale).astype(np.float32)
-    if supervision.several_exposures and len(np.unique(data.exposure_s)) < 2:
-        raise ConfigError(
-            f"variant {config.variant} needs frames of at least two exposures; this session has "
-            f"one ({float(data.exposure_s[0]):g} s): record with several exposures"
-        )
-    return data.c2w, data.bounds
-
-
 def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[SeeNerfModel, Preset]:
     """The model and the preset resized for this scene (field resolution from extent and sensor)."""
     variant = get_variant(config.variant)
-    poses, bounds = training_frame(data, config)
+    method = method_class(variant)
+    poses, bounds = method.training_frame(data, config)
     preset = get_preset(config.preset)
     space = (
         forward_facing_space(poses, data.intrinsics, bounds, data.image_size)
@@ -162,8 +137,9 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
             "polarity_scale": data.polarity_scale,
         },
         pose_correction=PoseCorrection(data.num_frames)
-        if config.refine_poses and not variant.supervision.truth_hdr
+        if config.refine_poses and method.refines_poses
         else None,
+        in_truth_frame=method.in_truth_frame,
     )
     return model.to(device), preset
 

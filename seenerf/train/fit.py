@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from davis_io.errors import SeecapError
+from davis_io import SeecapError
 from davis_io.session import DEFAULT_BINS, Session, output_errors, writer_lock
 from davis_io.session.folder import empty_folder, plain_name
 from seenerf.data.arrays import TrainingData

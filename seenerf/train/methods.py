@@ -18,11 +18,14 @@ import torch
 
 from seenerf.data.arrays import TrainingData
 from seenerf.data.batching import FrameSampler, OracleSampler
+from seenerf.data.frames import truth_to_fit_frame
+from seenerf.errors import ConfigError
 from seenerf.eval.metrics import psnr
 from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.pose_correction import PRIOR_WEIGHT as POSE_PRIOR_WEIGHT
 from seenerf.model.presets import Preset
+from seenerf.model.variants import Variant, get_variant
 from seenerf.train.losses import (
     event_loss,
     hdr_tone_map,
@@ -40,6 +43,7 @@ __all__ = [
     "frame_scale",
     "make_method",
     "merged_preset",
+    "method_class",
 ]
 
 VALIDATION_CHUNK = 2048
@@ -100,6 +104,10 @@ def frame_scale(data: TrainingData, config: FitConfig) -> Callable[[torch.Tensor
 class Method:
     """The part of a fit that depends on its variant.
 
+    Class attributes, read before a model exists (:func:`method_class`):
+    ``in_truth_frame``, the field is trained in the truth's frame (test poses need no mapping);
+    ``refines_poses``, the training poses may be refined with the field.
+
     Args:
         model: the model being trained.
         data: the training arrays.
@@ -111,6 +119,14 @@ class Method:
         validation: flat indices ``frame * H * W + pixel`` of the held-out training pixels
             (drawn at the configuration's seed, never trained on).
     """
+
+    in_truth_frame = False
+    refines_poses = True
+
+    @classmethod
+    def training_frame(cls, data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
+        """Poses the field is trained at and the scene's near / far depth in their frame."""
+        return data.c2w, data.bounds
 
     def __init__(
         self,
@@ -149,6 +165,22 @@ class RecordingMethod(Method):
     The terms: the frames' LDR error (eq. 15), the events' (weighted by the preset's lambda),
     the response's anchor, the field's smoothness, and the prior of refined poses.
     """
+
+    @classmethod
+    def training_frame(cls, data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
+        """The estimated latent poses and their bounds.
+
+        Raises:
+            ConfigError: the variant needs frames of several exposures and the session has one.
+        """
+        if get_variant(config.variant).supervision.several_exposures:
+            if len(np.unique(data.exposure_s)) < 2:
+                raise ConfigError(
+                    f"variant {config.variant} needs frames of at least two exposures; this "
+                    f"session has one ({float(data.exposure_s[0]):g} s): record with several "
+                    "exposures"
+                )
+        return data.c2w, data.bounds
 
     def __init__(self, model, data, config, preset, device):
         super().__init__(model, data, config, preset, device)
@@ -213,6 +245,25 @@ class SharpTruthMethod(Method):
     The terms: the tone-mapped HDR error and the field's smoothness.
     """
 
+    in_truth_frame = True
+    refines_poses = False
+
+    @classmethod
+    def training_frame(cls, data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
+        """The truth's poses, with the bounds rescaled into the truth's frame.
+
+        (Estimated poses are known up to a similarity.)
+
+        Raises:
+            ConfigError: the session has no truth.
+        """
+        if data.truth is None:
+            raise ConfigError(
+                f"variant {config.variant} needs ground truth (an emulated session with truth/)"
+            )
+        scale = truth_to_fit_frame(data).scale
+        return data.truth.c2w, (np.asarray(data.bounds, np.float64) / scale).astype(np.float32)
+
     def __init__(self, model, data, config, preset, device):
         super().__init__(model, data, config, preset, device)
         truth = data.truth
@@ -244,9 +295,13 @@ class SharpTruthMethod(Method):
         return psnr(torch.cat(predicted).cpu().numpy(), torch.cat(true).cpu().numpy())
 
 
+def method_class(variant: Variant) -> type[Method]:
+    """The method of a variant, by what the variant supervises."""
+    return SharpTruthMethod if variant.supervision.truth_hdr else RecordingMethod
+
+
 def make_method(
     model: SeeNerfModel, data: TrainingData, config: FitConfig, preset: Preset, device: str
 ) -> Method:
-    """The method of the model's variant, by what the variant supervises."""
-    kind = SharpTruthMethod if model.variant.supervision.truth_hdr else RecordingMethod
-    return kind(model, data, config, preset, device)
+    """The method of the model's variant, made for this fit."""
+    return method_class(model.variant)(model, data, config, preset, device)

@@ -129,7 +129,7 @@ def render_run(
         plain_name(out_name, "--out")
     run = open_run(run_dir)
     if path is None:
-        poses, _ = test_poses_in_fit_frame(run.data, run.model.variant.supervision.truth_hdr)
+        poses, _ = test_poses_in_fit_frame(run.data, run.model.in_truth_frame)
     else:
         poses = orbit_poses(run.data) if path == "orbit" else read_path(Path(path))
     exposures = exposures_s or bracket_exposures(run.config, run.data)

@@ -291,16 +291,16 @@ def test_progress_line_reports_losses_psnr_rate_and_eta(tiny_scene):
 
 
 def test_oracle_bounds_follow_the_truth_frame_not_the_estimated_one():
-    from seenerf.train.builder import training_frame
+    from seenerf.train.methods import RecordingMethod, SharpTruthMethod
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
     estimated = scene.c2w.copy()
     estimated[..., :3, 3] *= 10.0  # the reconstruction's frame: ten times the truth's scale
     scene.c2w, scene.bounds = estimated, scene.bounds * 10.0
-    poses, bounds = training_frame(scene, _config(variant="oracle"))
+    poses, bounds = SharpTruthMethod.training_frame(scene, _config(variant="oracle"))
     np.testing.assert_allclose(bounds, [1.0, 3.0], rtol=1e-4)  # plane_scene's true bounds
     assert poses is scene.truth.c2w
-    _, estimated_bounds = training_frame(scene, _config())
+    _, estimated_bounds = RecordingMethod.training_frame(scene, _config())
     np.testing.assert_allclose(estimated_bounds, [10.0, 30.0])
 
 
