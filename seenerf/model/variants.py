@@ -12,40 +12,11 @@ from seenerf.sensors.event_crf import EventModelSpec
 from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf
 
 __all__ = [
-    "BLURRY",
     "LOW_PASS_READINGS",
-    "MULTI_EXPOSURE",
-    "SHARP_HDR",
     "VARIANTS",
-    "Supervision",
     "Variant",
     "get_variant",
 ]
-
-
-@dataclass(frozen=True)
-class Supervision:
-    """What training compares the model with.
-
-    Attributes:
-        truth_hdr: the truth's sharp linear HDR at the truth's poses (the oracle): the field is
-            trained in the truth's frame, on batches of the truth's images, by the HDR loss;
-            otherwise on the recorded frames at the estimated poses.
-        several_exposures: the frames must have at least two exposures.
-    """
-
-    truth_hdr: bool = False
-    several_exposures: bool = False
-
-
-BLURRY = Supervision()
-"""The recorded blurry frames (and their events)."""
-
-MULTI_EXPOSURE = Supervision(several_exposures=True)
-"""Recorded frames of several exposures."""
-
-SHARP_HDR = Supervision(truth_hdr=True)
-"""The truth's sharp HDR at the true poses: the oracle."""
 
 
 @dataclass(frozen=True)
@@ -62,9 +33,10 @@ class Variant:
         crf: the RGB response class: ``RgbCrf`` (three per-channel MLPs), ``PowerCrf`` (x^a),
             ``TabulatedCrf`` (the truth's table, the oracle) or None.
         events: the event model, or None for no event loss.
-        supervision: :data:`BLURRY` (recorded frames), :data:`MULTI_EXPOSURE` (frames of several
-            exposures, no events) or :data:`SHARP_HDR` (truth sharp HDR at true poses: the
-            oracle).
+        method: the name of the method that trains it (:data:`seenerf.train.methods.METHODS`):
+            ``recording`` (the recorded blurry frames and events at the estimated poses) or
+            ``sharp-truth`` (the truth's sharp HDR at the true poses: the oracle).
+        several_exposures: the recorded frames must have at least two exposures.
         sensor_from_truth: the sensor's values (thresholds of every pixel, event latency,
             cut-off, dead time, linear frames' noise) come from the emulator's truth instead of
             the session's calibration.
@@ -74,7 +46,8 @@ class Variant:
     imaging: Imaging = PIXEL
     crf: type[nn.Module] | None = RgbCrf
     events: EventModelSpec | None = field(default_factory=EventModelSpec)
-    supervision: Supervision = BLURRY
+    method: str = "recording"
+    several_exposures: bool = False
     sensor_from_truth: bool = False
 
 
@@ -108,14 +81,14 @@ VARIANTS: dict[str, Variant] = {
     "multi-exposure": Variant(
         "HDR-NeRF reference setting: frames at several exposures, no events",
         events=None,
-        supervision=MULTI_EXPOSURE,
+        several_exposures=True,
     ),
     "oracle": Variant(
         "upper bound: the same field trained on truth sharp linear HDR at true poses, "
         "LDR views through the true response",
         crf=TabulatedCrf,
         events=None,
-        supervision=SHARP_HDR,
+        method="sharp-truth",
     ),
 }
 """Every variant by name; ``full`` is the paper's method."""

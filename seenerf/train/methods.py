@@ -19,7 +19,7 @@ import torch
 from seenerf.data.arrays import TrainingData
 from seenerf.data.batching import FrameSampler, OracleSampler
 from seenerf.data.frames import truth_to_fit_frame
-from seenerf.errors import ConfigError
+from seenerf.errors import ConfigError, by_name
 from seenerf.eval.metrics import psnr
 from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
@@ -35,6 +35,7 @@ from seenerf.train.losses import (
 )
 
 __all__ = [
+    "METHODS",
     "LossTerm",
     "Method",
     "RecordingMethod",
@@ -173,7 +174,7 @@ class RecordingMethod(Method):
         Raises:
             ConfigError: the variant needs frames of several exposures and the session has one.
         """
-        if get_variant(config.variant).supervision.several_exposures:
+        if get_variant(config.variant).several_exposures:
             if len(np.unique(data.exposure_s)) < 2:
                 raise ConfigError(
                     f"variant {config.variant} needs frames of at least two exposures; this "
@@ -295,9 +296,20 @@ class SharpTruthMethod(Method):
         return psnr(torch.cat(predicted).cpu().numpy(), torch.cat(true).cpu().numpy())
 
 
+METHODS: dict[str, type[Method]] = {
+    "recording": RecordingMethod,
+    "sharp-truth": SharpTruthMethod,
+}
+"""Every method by the name a variant gives (:attr:`seenerf.model.variants.Variant.method`)."""
+
+
 def method_class(variant: Variant) -> type[Method]:
-    """The method of a variant, by what the variant supervises."""
-    return SharpTruthMethod if variant.supervision.truth_hdr else RecordingMethod
+    """The method that trains ``variant``.
+
+    Raises:
+        ConfigError: the variant names no known method.
+    """
+    return by_name(METHODS, "method", variant.method)
 
 
 def make_method(
