@@ -12,7 +12,7 @@ from seenerf.data.subframes import refine_exposure
 from seenerf.model.imaging import RayBatch
 from seenerf.render.rays import camera_rays
 
-__all__ = ["FrameSampler", "OracleSampler"]
+__all__ = ["FrameSampler", "SharpTruthSampler"]
 
 
 class FrameSampler:
@@ -118,7 +118,7 @@ class FrameSampler:
         )
 
 
-class OracleSampler:
+class SharpTruthSampler:
     """Draws sharp truth HDR pixels of the training views at their true poses.
 
     Args:

@@ -15,7 +15,7 @@ __all__ = [
     "hdr_tone_map",
     "ldr_loss",
     "noise_even",
-    "oracle_hdr_loss",
+    "sharp_hdr_loss",
 ]
 
 NOISE_REFERENCE = 0.25
@@ -81,7 +81,7 @@ def hdr_tone_map(hdr: torch.Tensor, scale: torch.Tensor | float) -> torch.Tensor
     return torch.log1p(5000.0 * (hdr / scale).clamp(min=0.0)) / math.log(5001.0)
 
 
-def oracle_hdr_loss(
+def sharp_hdr_loss(
     log_radiance: torch.Tensor, truth_hdr: torch.Tensor, scale: float
 ) -> torch.Tensor:
     """MSE of tone-mapped rendered and true sharp HDR (the oracle's supervision)."""

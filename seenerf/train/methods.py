@@ -17,7 +17,7 @@ import numpy as np
 import torch
 
 from seenerf.data.arrays import TrainingData
-from seenerf.data.batching import FrameSampler, OracleSampler
+from seenerf.data.batching import FrameSampler, SharpTruthSampler
 from seenerf.data.frames import truth_to_fit_frame
 from seenerf.errors import ConfigError, by_name
 from seenerf.eval.metrics import psnr
@@ -31,7 +31,7 @@ from seenerf.train.losses import (
     hdr_tone_map,
     ldr_loss,
     noise_even,
-    oracle_hdr_loss,
+    sharp_hdr_loss,
 )
 
 __all__ = [
@@ -268,7 +268,7 @@ class SharpTruthMethod(Method):
     def __init__(self, model, data, config, preset, device):
         super().__init__(model, data, config, preset, device)
         truth = data.truth
-        self.truth = OracleSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, device)
+        self.truth = SharpTruthSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, device)
 
     def step(self, generator: torch.Generator) -> Step:
         """The loss terms of a batch of sharp truth pixels."""
@@ -276,7 +276,7 @@ class SharpTruthMethod(Method):
         origins, directions, hdr = self.truth.sample(count, generator)
         model = self.model
         passes = model.renderer(origins, directions, model.near, model.far, None, generator)
-        error = sum(oracle_hdr_loss(p.values, hdr, self.truth.scale) for p in passes)
+        error = sum(sharp_hdr_loss(p.values, hdr, self.truth.scale) for p in passes)
         terms = [LossTerm("hdr", 1.0, error), *self._smoothness()]
         return Step(terms, len(origins), passes[-1].num_samples)
 
