@@ -1,7 +1,7 @@
 """The loss terms of short fixed-seed fits, step by step: what a change to the training loop's
 structure must leave as it was (``tests/fixtures/loss_trajectories.json``).
 
-    python tests/seenerf/trajectory.py   # writes the fixture from the code as it is
+    python tests/seenerf/loss_trajectory.py   # writes the fixture from the code as it is
 """
 
 import json

@@ -1,10 +1,10 @@
 """A short fit at a fixed seed takes the same steps as the training loop did when the fixture
-was written: structure may change, what is learned may not (``trajectory.py`` writes it)."""
+was written: structure may change, what is learned may not (``loss_trajectory.py`` writes it)."""
 
 import json
 
 import pytest
-from trajectory import FITS, FIXTURE, trajectory
+from loss_trajectory import FITS, FIXTURE, trajectory
 
 
 @pytest.mark.parametrize("name", sorted(FITS))
