@@ -2,7 +2,7 @@ import json
 
 import numpy as np
 import pytest
-from emulated_sessions import REDUCED, record_emulated
+from emulated_sessions import record_emulated
 
 from davis_io.cli import main
 from davis_io.errors import UsageError
@@ -145,29 +145,52 @@ def test_latent_frames_are_made_with_the_nominal_sensor_beside_a_doubtful_calibr
     assert [label for label, _ in _latent_sensors(nothing, None)] == ["default"]
 
 
-def test_poses_keep_the_nominal_sensors_frames_when_the_calibration_ruins_them(tmp_path):
-    from davis_io.session import DEFAULT_THRESHOLD, SensorCalibration
+def test_poses_keep_the_better_of_the_measured_and_the_nominal_latent_frames(
+    textureless_session, monkeypatch
+):
+    import davis_io.poses.estimate as estimate
+    from davis_io.poses.colmap import SparseModel
+    from davis_io.poses.nerfstudio import latent_frame_name
+    from davis_io.poses.recovery import Outcome
+    from davis_io.session import SensorCalibration
 
-    folder, intrinsics = record_emulated(tmp_path / "room", **REDUCED)
-    # Thresholds ten times too large, flagged as assumed: the latent frames it makes are
-    # the blurred frames multiplied by wild exponentials of the events.
-    wrong = SensorCalibration(3.0, 3.0, assumed={"thresholds": "at its search's bound"})
-    with Session.open(folder) as session:
-        session.write_calibration(wrong)
-    report = estimate_poses(folder, b=4, intrinsics=intrinsics)
-    assert set(report.compared) == {"measured", "nominal"}
-    assert report.latent_sensor == "nominal" and report.threshold == pytest.approx(
-        DEFAULT_THRESHOLD
-    )
-    said = report.compared
-    assert said["nominal"]["registered"] >= said["measured"]["registered"]
-    assert "latent frames kept: nominal" in report.summary()
-    colmap = folder / "colmap"
-    assert not (colmap / "nominal").exists() and len(list((colmap / "images").glob("*"))) == 40
-    with Session.open(folder) as session:
-        errors = compare_with_truth(
-            session.poses(4), session.bins(4).split_us, load_truth(session.truth_dir)
+    b = 2
+    with Session.open(textureless_session) as session:
+        doubtful = SensorCalibration(0.3, 0.3, assumed={"latency_us": "at its profile's end"})
+        session.write_calibration(doubtful)
+        split_us, frames = session.bins(b).split_us, session.frame_count
+    names = [[latent_frame_name(i, k) for k in range(b + 1)] for i in range(frames)]
+    flat = [name for view in names for name in view]
+    made_with = {}
+
+    def reconstruct(session, b, label, calibration, folder, intrinsics, progress):
+        """COLMAP as it might answer: the nominal frames register 18 of 18, the measured 12."""
+        made_with[label] = calibration.threshold
+        (folder / "images").mkdir(parents=True, exist_ok=True)
+        (folder / "images" / f"{label}.png").write_bytes(b"")
+        registered = flat[: 12 if label == "measured" else 18]
+        model = SparseModel(
+            c2w={name: np.eye(4) for name in registered},
+            intrinsics=np.array([50.0, 50.0, 31.5, 23.5]),
+            distortion=np.zeros(0),
+            points=np.zeros((10, 3)),
+            track_counts={name: 5 for name in registered},
+            bounds=np.array([1.0, 3.0]),
+            reprojection_error_px=0.5,
         )
-    assert errors.median_rotation_deg < 1.0
+        succeeded = label == "nominal"
+        outcome = Outcome(model, "exhaustive", succeeded, ("exhaustive",))
+        return estimate._Trial(label, calibration, folder, names, split_us, outcome)
+
+    monkeypatch.setattr(estimate, "_reconstruct", reconstruct)
+    report = estimate_poses(textureless_session, b=b)
+    assert made_with == {"measured": 0.3, "nominal": 0.3}
+    assert report.latent_sensor == "nominal" and report.registered == 18
+    assert report.compared["measured"]["registered"] == 12
+    assert report.compared["nominal"]["mean_track_length"] == 9.0  # 18 x 5 / 10 points
+    assert "latent frames kept: nominal" in report.summary()
+    colmap = textureless_session / "colmap"
+    assert [p.name for p in (colmap / "images").iterdir()] == ["nominal.png"]
+    assert not (colmap / "nominal").exists()
     saved = json.loads((colmap / "report.json").read_text())
     assert saved["latent_sensor"] == "nominal" and set(saved["compared"]) == {"measured", "nominal"}
