@@ -15,7 +15,7 @@ import cv2
 import torch
 from threadpoolctl import threadpool_limits
 
-__all__ = ["busy_cores", "choose_threads", "limit_threads", "threads_for"]
+__all__ = ["CoreWatch", "busy_cores", "choose_threads", "limit_threads", "threads_for"]
 
 LOOK_S = 0.3
 """How long the machine is watched to see how busy its cores are."""
@@ -48,16 +48,43 @@ def _cpu_times(stat: str) -> tuple[int, int]:
     return total - idle, total
 
 
+class CoreWatch:
+    """The cores' worth of work other processes do, between two looks at the machine.
+
+    Reads ``/proc/stat`` (every process's work) and leaves out this process's own CPU time, so
+    a fit can look while it trains.
+    """
+
+    def __init__(self, stat: Path = Path("/proc/stat")):
+        self.stat = stat
+        self.last = self._look()
+
+    def _look(self) -> tuple[int, int, float] | None:
+        try:
+            busy, total = _cpu_times(self.stat.read_text())
+        except (OSError, ValueError, IndexError):
+            return None
+        return busy, total, time.process_time()
+
+    def others(self) -> float | None:
+        """Cores other work kept busy since the last look; None where unreadable or too soon."""
+        now, last = self._look(), self.last
+        self.last = now
+        if now is None or last is None or now[1] <= last[1]:
+            return None
+        cores = os.cpu_count() or 1
+        busy = cores * (now[0] - last[0]) / (now[1] - last[1])
+        wall_s = (now[1] - last[1]) / (cores * os.sysconf("SC_CLK_TCK"))
+        return max(0.0, busy - (now[2] - last[2]) / wall_s)
+
+
 def busy_cores(look_s: float = LOOK_S, stat: Path = Path("/proc/stat")) -> float | None:
-    """How many cores' worth of work the machine did while watched, or None where unreadable."""
-    try:
-        busy0, total0 = _cpu_times(stat.read_text())
-        time.sleep(look_s)
-        busy1, total1 = _cpu_times(stat.read_text())
-    except (OSError, ValueError, IndexError):
+    """How many cores' worth of other work the machine did while watched (None: unreadable)."""
+    watch = CoreWatch(stat)
+    if watch.last is None:
         return None
-    cores = os.cpu_count() or 1
-    return cores * (busy1 - busy0) / max(total1 - total0, 1)
+    time.sleep(look_s)
+    return watch.others()
 
 
 def choose_threads(requested: int) -> tuple[int, str]:

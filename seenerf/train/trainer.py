@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -18,7 +19,7 @@ from seenerf.train.builder import build_model, resolve_device
 from seenerf.train.checkpoint import load_checkpoint, save_checkpoint
 from seenerf.train.methods import make_method, merged_preset
 from seenerf.train.stopping import StopRequest, stop_requests
-from seenerf.train.threads import limit_threads
+from seenerf.train.threads import CoreWatch, limit_threads, threads_for
 
 __all__ = ["TrainSummary", "Trainer", "TrainingProgress"]
 
@@ -36,6 +37,11 @@ rendered again."""
 
 OUTPUT_FIXED_S = 8.0
 """Scores, plots and the last checkpoint after training, seconds."""
+
+THREADS_CHECK_S = 30.0
+"""Seconds of training between looks at how busy other work keeps the cores (automatic threads
+only): a fit that started alone gives a core up when another process starts, and takes it back
+when it ends."""
 
 SKIPPED_IN_A_ROW_LIMIT = 50
 """Steps in a row without a finite loss after which a fit stops as failed: nothing is learned."""
@@ -123,6 +129,9 @@ class Trainer:
         self.total_steps = config.steps or (math.inf if budgeted else self.preset.steps)
         self.spent_s = spent_s
         self.method = make_method(self.model, data, config, self.preset, self.device)
+        automatic = config.threads == 0 and self.device == "cpu"
+        self.core_watch = CoreWatch() if automatic else None
+        self.cores_looked_at = time.perf_counter()
         field_params = list(self.model.renderer.parameters())
         sensor_params = [
             p
@@ -181,6 +190,7 @@ class Trainer:
             if time.perf_counter() - saved_at > CHECKPOINT_EVERY_S:
                 self._checkpoint()
                 saved_at = time.perf_counter()
+            self._share_cores()
             if self._budget_left() <= 0:
                 self.summary.stopped = "budget"
                 break
@@ -192,6 +202,19 @@ class Trainer:
         self.summary.rays_per_s = rays / max(time.perf_counter() - start, 1e-9)
         self._checkpoint()
         return self.summary
+
+    def _share_cores(self) -> None:
+        """With automatic threads, every :data:`THREADS_CHECK_S`, one per core others leave."""
+        if self.core_watch is None or time.perf_counter() - self.cores_looked_at < THREADS_CHECK_S:
+            return
+        self.cores_looked_at = time.perf_counter()
+        others = self.core_watch.others()
+        if others is None:
+            return
+        count = threads_for(len(os.sched_getaffinity(0)), others)
+        if count != torch.get_num_threads():
+            limit_threads(count)
+            self.log(f"threads: {count} from now on ({others:.1f} cores busy with other work)")
 
     def _check_skipped(self, skipped_before: int) -> int:
         """Fail once :data:`SKIPPED_IN_A_ROW_LIMIT` steps in a row had no finite loss.
