@@ -30,3 +30,13 @@ def test_cpu_model():
     text = "processor\t: 0\nvendor_id\t: GenuineIntel\nmodel name\t: Intel(R) Xeon(R) Processor\n"
     assert cpu_model(text) == "Intel(R) Xeon(R) Processor"
     assert cpu_model("") == "unknown CPU"
+
+
+def test_a_published_command_names_no_folder_of_the_machine(tmp_path, monkeypatch):
+    from benchlib.machine import exact_command
+
+    monkeypatch.chdir(tmp_path)
+    typed = ["tools/bench_blind.py", "--out", str(tmp_path / "out" / "blind"), "--jobs", "2"]
+    assert exact_command(typed).endswith(" tools/bench_blind.py --out out/blind --jobs 2")
+    outside = exact_command(["tools/bench.py", "--out", str(tmp_path.parent / "elsewhere")])
+    assert outside.endswith(" --out ../elsewhere") and str(tmp_path) not in outside

@@ -71,6 +71,11 @@ def describe_machine() -> Machine:
 
 
 def exact_command(argv: list[str] | None = None) -> str:
-    """The command line as typed, quoted for a POSIX shell (interpreter by its base name)."""
+    """The command line as typed, quoted for a POSIX shell.
+
+    The interpreter is named by its base name, and an absolute path by its path from the
+    working folder: a published report names no folder of the machine it ran on.
+    """
     argv = sys.argv if argv is None else argv
-    return shlex.join([Path(sys.executable).name, *argv])
+    shown = [os.path.relpath(a) if os.path.isabs(a) else a for a in argv]
+    return shlex.join([Path(sys.executable).name, *shown])
