@@ -16,6 +16,7 @@ __all__ = [
     "ldr_loss",
     "noise_even",
     "sharp_hdr_loss",
+    "tone_mapped_render",
 ]
 
 NOISE_REFERENCE = 0.25
@@ -81,9 +82,14 @@ def hdr_tone_map(hdr: torch.Tensor, scale: torch.Tensor | float) -> torch.Tensor
     return torch.log1p(5000.0 * (hdr / scale).clamp(min=0.0)) / math.log(5001.0)
 
 
+def tone_mapped_render(log_radiance: torch.Tensor, scale: torch.Tensor | float) -> torch.Tensor:
+    """:func:`hdr_tone_map` of rendered log radiance (clamped where ``exp`` would overflow)."""
+    return hdr_tone_map(torch.exp(log_radiance.clamp(max=60.0)), scale)
+
+
 def sharp_hdr_loss(
     log_radiance: torch.Tensor, truth_hdr: torch.Tensor, scale: float
 ) -> torch.Tensor:
     """MSE of tone-mapped rendered and true sharp HDR (the oracle's supervision)."""
-    predicted = hdr_tone_map(torch.exp(log_radiance.clamp(max=60.0)), scale)
+    predicted = tone_mapped_render(log_radiance, scale)
     return (predicted - hdr_tone_map(truth_hdr, scale)).square().mean()

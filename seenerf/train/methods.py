@@ -32,6 +32,7 @@ from seenerf.train.losses import (
     ldr_loss,
     noise_even,
     sharp_hdr_loss,
+    tone_mapped_render,
 )
 
 __all__ = [
@@ -290,8 +291,7 @@ class SharpTruthMethod(Method):
         for chunk in (self.validation % (images * height * width)).split(VALIDATION_CHUNK):
             origins, directions, hdr = self.truth.pixels(chunk.to(self.truth.hdr.device))
             log_radiance = self.model.render_log_radiance(origins, directions)
-            radiance = torch.exp(log_radiance.clamp(max=60.0))
-            predicted.append(hdr_tone_map(radiance, self.truth.scale))
+            predicted.append(tone_mapped_render(log_radiance, self.truth.scale))
             true.append(hdr_tone_map(hdr, self.truth.scale))
         return psnr(torch.cat(predicted).cpu().numpy(), torch.cat(true).cpu().numpy())
 

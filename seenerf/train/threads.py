@@ -15,7 +15,14 @@ import cv2
 import torch
 from threadpoolctl import threadpool_limits
 
-__all__ = ["CoreWatch", "busy_cores", "choose_threads", "limit_threads", "threads_for"]
+__all__ = [
+    "CoreWatch",
+    "busy_cores",
+    "choose_threads",
+    "limit_threads",
+    "threads_beside",
+    "threads_for",
+]
 
 LOOK_S = 0.3
 """How long the machine is watched to see how busy its cores are."""
@@ -46,6 +53,11 @@ def _cpu_times(stat: str) -> tuple[int, int]:
     idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle and waiting for I/O
     total = sum(fields[:8])  # guest time is counted inside user time already
     return total - idle, total
+
+
+def threads_beside(others: float) -> int:
+    """Threads for a fit beside ``others`` cores of other work, on the cores it may run on."""
+    return threads_for(len(os.sched_getaffinity(0)), others)
 
 
 class CoreWatch:
@@ -99,5 +111,5 @@ def choose_threads(requested: int) -> tuple[int, str]:
     busy = busy_cores()
     if busy is None:
         return cores, f"threads: {cores}, one per core (how busy they are is unknown here)"
-    count = threads_for(cores, busy)
+    count = threads_beside(busy)
     return count, f"threads: {count} of {cores} cores ({busy:.1f} cores busy with other work)"

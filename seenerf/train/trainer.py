@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -19,7 +18,7 @@ from seenerf.train.builder import build_model, resolve_device
 from seenerf.train.checkpoint import load_checkpoint, save_checkpoint
 from seenerf.train.methods import make_method, merged_preset
 from seenerf.train.stopping import StopRequest, stop_requests
-from seenerf.train.threads import CoreWatch, limit_threads, threads_for
+from seenerf.train.threads import CoreWatch, limit_threads, threads_beside
 
 __all__ = ["TrainSummary", "Trainer", "TrainingProgress"]
 
@@ -211,7 +210,7 @@ class Trainer:
         others = self.core_watch.others()
         if others is None:
             return
-        count = threads_for(len(os.sched_getaffinity(0)), others)
+        count = threads_beside(others)
         if count != torch.get_num_threads():
             limit_threads(count)
             self.log(f"threads: {count} from now on ({others:.1f} cores busy with other work)")

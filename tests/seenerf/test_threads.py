@@ -80,6 +80,7 @@ def test_a_fit_leaves_its_own_work_out_of_what_others_do(tmp_path, monkeypatch):
 def test_a_fit_with_automatic_threads_gives_a_core_up_when_other_work_starts(
     tiny_scene, monkeypatch
 ):
+    import seenerf.train.threads as threads
     import seenerf.train.trainer as trainer_module
     from seenerf.model.config import FitConfig
     from seenerf.train.threads import CoreWatch
@@ -87,7 +88,7 @@ def test_a_fit_with_automatic_threads_gives_a_core_up_when_other_work_starts(
 
     monkeypatch.setattr(trainer_module, "THREADS_CHECK_S", 0.0)
     monkeypatch.setattr(CoreWatch, "others", lambda self: 1.0)
-    monkeypatch.setattr(trainer_module.os, "sched_getaffinity", lambda pid: {0, 1})
+    monkeypatch.setattr(threads.os, "sched_getaffinity", lambda pid: {0, 1})
     before = torch.get_num_threads()
     lines = []
     try:
