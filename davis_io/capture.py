@@ -54,6 +54,7 @@ class CaptureRequest:
             (None: the file's).
         event_window_us: the emulator keeps only the events this near an exposure, µs (0: all).
         still_frames: the emulator holds the camera still for this many frames mid-recording.
+        lens: the emulator's lens: ``pinhole``, ``random`` or OpenCV's ``k1,k2,p1,p2[,k3]``.
     """
 
     exposure_us: int | None = None
@@ -67,6 +68,7 @@ class CaptureRequest:
     color_filter: ColorFilter | None = None
     event_window_us: int = 0
     still_frames: int = 0
+    lens: str = "pinhole"
 
     @property
     def kind(self) -> str:
@@ -106,6 +108,7 @@ def _open_emulator(request: CaptureRequest) -> PacketSource:
         "seed": request.seed,
         "event_window_us": request.event_window_us,
         "still_frames": request.still_frames,
+        "lens": request.lens,
     }
     if request.exposure_us is not None:
         settings["exposure_us"] = request.exposure_us

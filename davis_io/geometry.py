@@ -247,8 +247,8 @@ def nerfstudio_transforms(
     """A ``transforms.json`` that nerfstudio's and instant-ngp's loaders read.
 
     Camera-to-world in OpenGL axes, the principal point moved to their pixel convention (pixel
-    centres at +0.5), the OpenCV model with its distortion keys (k1, k2, p1, p2; zero when the
-    session has none).
+    centres at +0.5), the OpenCV model with its distortion keys (k1, k2, p1, p2, and k3 when the
+    lens has one; zero when the session has none).
 
     Args:
         c2w: ``(N, 4, 4)`` OpenCV camera-to-world.
@@ -258,14 +258,14 @@ def nerfstudio_transforms(
         file_paths: each view's image, relative to the JSON file.
     """
     fx, fy, cx, cy = (float(v) for v in intrinsics)
-    coefficients = np.zeros(4)
-    known = np.asarray(distortion, float).ravel()[:4]
+    coefficients = np.zeros(5)
+    known = np.asarray(distortion, float).ravel()[:5]
     coefficients[: len(known)] = known
     frames = [
         {"file_path": name, "transform_matrix": (pose @ OPENCV_TO_OPENGL).tolist()}
         for name, pose in zip(file_paths, np.asarray(c2w, float), strict=True)
     ]
-    k1, k2, p1, p2 = (float(c) for c in coefficients)
+    k1, k2, p1, p2, k3 = (float(c) for c in coefficients)
     return {
         "camera_model": "OPENCV",
         "fl_x": fx,
@@ -278,5 +278,6 @@ def nerfstudio_transforms(
         "k2": k2,
         "p1": p1,
         "p2": p2,
+        **({"k3": k3} if k3 else {}),
         "frames": frames,
     }

@@ -7,19 +7,27 @@ from collections.abc import Callable
 from pathlib import Path
 
 from davis_io.calibration.session_calibration import session_calibration
-from davis_io.poses.estimate import estimate_poses
+from davis_io.poses.estimate import estimate_poses, made_with, stated_lens
 from davis_io.session import Session
 
 __all__ = ["StageLines", "prepare_session"]
 
 
-def prepare_session(session_dir: Path | str, b: int, log: Callable[[str], None] = print) -> float:
+def prepare_session(
+    session_dir: Path | str,
+    b: int,
+    log: Callable[[str], None] = print,
+    camera_calibration: Path | None = None,
+) -> float:
     """Calibrate the sensor and estimate poses for ``b`` if the session lacks them.
 
     Args:
         session_dir: the session folder.
         b: bins per exposure of the poses.
         log: receives one line per step taken.
+        camera_calibration: a calibration file of the camera's lens (read by
+            :func:`davis_io.lens.read_camera_calibration`); poses made with another lens are
+            estimated again with this one, held fixed.
 
     Returns:
         The seconds spent.
@@ -29,16 +37,19 @@ def prepare_session(session_dir: Path | str, b: int, log: Callable[[str], None] 
         SessionError, UsageError: the session cannot be read or written.
     """
     start = time.perf_counter()
+    lens = stated_lens(session_dir, camera_calibration) if camera_calibration else None
     with Session.open(session_dir) as session:
         if session.calibration() is None:
             log("measuring the sensor from the recording")
             calibration = session_calibration(session, progress=log)
             log(calibration.summary())
             log(f"sensor measured in {time.perf_counter() - start:.0f} s")
-        if session.poses(b) is None:
-            log(f"estimating poses (b={b})")
+        poses = session.poses(b)
+        if poses is None or (lens is not None and not made_with(poses, lens)):
+            log(f"estimating poses (b={b})" + (f" with the lens {lens.summary()}" if lens else ""))
             begun = time.perf_counter()
-            log(estimate_poses(session, b=b, progress=StageLines(log)).summary())
+            report = estimate_poses(session, b=b, lens=lens, progress=StageLines(log))
+            log(report.summary())
             log(f"poses estimated in {time.perf_counter() - begun:.0f} s")
     return time.perf_counter() - start
 

@@ -23,10 +23,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="event bins per exposure (b)",
     )
     parser.add_argument(
+        "--camera-calibration",
         "--intrinsics",
         type=Path,
-        help="known intrinsics: JSON with fx, fy, cx, cy in pixels (pixel centres at integers), "
-        "or a text file with those four numbers",
+        metavar="FILE",
+        help="the camera's lens, held fixed: DV's or OpenCV's calibration (XML or YAML), "
+        "COLMAP's cameras.txt, or JSON with fx, fy, cx, cy (pixel centres at integers) and "
+        "optionally k1, k2, p1, p2, k3",
     )
     parser.add_argument(
         "--threshold",
@@ -59,15 +62,16 @@ class _StageBars:
 
 def run(args: argparse.Namespace) -> int:
     """Estimate the poses and print the report."""
-    from davis_io.poses.estimate import estimate_poses, read_intrinsics
+    from davis_io.poses.estimate import estimate_poses, stated_lens
 
-    intrinsics = read_intrinsics(args.intrinsics) if args.intrinsics else None
+    calibration = args.camera_calibration
+    lens = stated_lens(args.session, calibration) if calibration else None
     bars = _StageBars()
     try:
         report = estimate_poses(
             args.session,
             b=args.bins,
-            intrinsics=intrinsics,
+            lens=lens,
             force=args.force,
             progress=bars,
             threshold=args.threshold,

@@ -74,6 +74,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "in the middle of the recording",
     )
     parser.add_argument(
+        "--lens",
+        default="pinhole",
+        metavar="pinhole|random|K1,K2,P1,P2[,K3]",
+        help="with --emulate: the lens's distortion (OpenCV's model; random: a barrel "
+        "distortion drawn from --seed; default: none)",
+    )
+    parser.add_argument(
         "--color-filter",
         choices=[c.value for c in ColorFilter if c.is_color],
         help="with --replay: the sensor's colour filter, for a file of demosaiced colour frames "
@@ -90,11 +97,17 @@ def run(args: argparse.Namespace) -> int:
     from davis_io.capture import CaptureRequest, record_capture
     from davis_io.session.folder import default_session_name
 
-    emulator_only = args.sensor != "default" or args.seed or args.event_window or args.still_frames
+    emulator_only = (
+        args.sensor != "default"
+        or args.seed
+        or args.event_window
+        or args.still_frames
+        or args.lens != "pinhole"
+    )
     if args.emulate is None and emulator_only:
         raise UsageError(
-            "--sensor, --seed, --event-window and --still-frames describe the emulated camera: "
-            "use them with --emulate"
+            "--sensor, --seed, --event-window, --still-frames and --lens describe the emulated "
+            "camera: use them with --emulate"
         )
     if args.replay is None and args.color_filter is not None:
         raise UsageError("--color-filter describes a replayed file's sensor: use it with --replay")
@@ -110,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
         color_filter=None if args.color_filter is None else ColorFilter(args.color_filter),
         event_window_us=_duration(args.event_window, "--event-window", EXPOSURE_S) or 0,
         still_frames=args.still_frames,
+        lens=args.lens,
     )
     if args.replay is not None and args.exposure is not None:
         print(

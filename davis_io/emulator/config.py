@@ -9,10 +9,12 @@ import numpy as np
 
 from davis_io.chips import DEFAULT_FRAME_GAP_US
 from davis_io.emulator.dvs import DVS_PRESETS
+from davis_io.emulator.lens_view import lens_distortion
 from davis_io.emulator.raytrace import PinholeCamera
 from davis_io.emulator.response import RESPONSE_CURVES
 from davis_io.emulator.sensor import SENSOR_KINDS, Sensor, default_sensor, draw_sensor
 from davis_io.errors import UsageError
+from davis_io.lens import Lens
 from davis_io.types import ColorFilter
 
 __all__ = ["EmulatorConfig"]
@@ -61,6 +63,8 @@ class EmulatorConfig:
         still_frames: this many frames in the middle of the recording are taken with the camera
             held still at one place (no move, no shake: only the pixels' noise fires); 0 for
             none.
+        lens: ``pinhole``, ``random`` (a radial and tangential distortion drawn from ``seed``)
+            or OpenCV's coefficients ``k1,k2,p1,p2[,k3]``.
     """
 
     scene: str = "room"
@@ -90,6 +94,7 @@ class EmulatorConfig:
     imu_rate_hz: int = 1000
     event_window_us: int = 0
     still_frames: int = 0
+    lens: str = "pinhole"
 
     def __post_init__(self) -> None:
         try:
@@ -135,6 +140,7 @@ class EmulatorConfig:
             )
         if problems:
             raise UsageError("emulator settings: " + "; ".join(problems))
+        self.distortion  # noqa: B018 -- a lens that cannot be read is refused here
         self._check_memory()
 
     def _check_memory(self) -> None:
@@ -161,6 +167,18 @@ class EmulatorConfig:
             self.focal_px,
             (self.width - 1) / 2,
             (self.height - 1) / 2,
+        )
+
+    @property
+    def distortion(self) -> tuple[float, ...]:
+        """OpenCV's coefficients of the lens these settings name (empty for a pinhole)."""
+        return lens_distortion(self.lens, self.seed)
+
+    @property
+    def optics(self) -> Lens:
+        """The camera's lens: its pinhole intrinsics and its distortion."""
+        return Lens.pinhole(self.width, self.height, self.camera.intrinsics).with_distortion(
+            self.distortion
         )
 
     @property

@@ -21,7 +21,7 @@ from davis_io.emulator.aps import ApsSettings, expose, subframe_times
 from davis_io.emulator.colorfilter import through_filter
 from davis_io.emulator.config import EmulatorConfig
 from davis_io.emulator.dvs import DvsPixels
-from davis_io.emulator.raytrace import PinholeCamera
+from davis_io.emulator.lens_view import LensView
 from davis_io.emulator.scene import Scene
 from davis_io.emulator.scenes import get_scene
 from davis_io.emulator.trajectory import Shake, Trajectory, grid_positions, imu_readings
@@ -118,8 +118,8 @@ class EmulatedCamera(Closing):
         return DvsPixels(self.sensor.dvs, config.height, config.width, config.seed)
 
     @cached_property
-    def _camera(self) -> PinholeCamera:
-        return self.config.camera
+    def _view(self) -> LensView:
+        return LensView(self.config.optics)
 
     @cached_property
     def _channels(self) -> np.ndarray | None:
@@ -131,9 +131,9 @@ class EmulatedCamera(Closing):
 
     def sensor_image(self, c2w: np.ndarray) -> np.ndarray:
         """``(H, W)`` float32 radiance each pixel sees through its filter at pose ``c2w``."""
-        if self._channels is not None:
-            return self.scene.render_channel(self._camera, c2w, self._channels)
-        radiance, _ = self.scene.render(self._camera, c2w)
+        if self._channels is not None and self._view.lens.is_pinhole:
+            return self.scene.render_channel(self._view.camera, c2w, self._channels)
+        radiance, _ = self._view.render(self.scene, c2w)
         return through_filter(radiance, self._weights)
 
     def expose_at(

@@ -8,6 +8,7 @@ from davis_io.emulator.aps import ApsSettings, linear_noise, subframe_times
 from davis_io.emulator.colorfilter import sensor_channels
 from davis_io.emulator.config import EmulatorConfig
 from davis_io.emulator.dvs import DvsPixels
+from davis_io.emulator.lens_view import LensView
 from davis_io.emulator.response import response_table
 from davis_io.emulator.scene import Scene
 from davis_io.emulator.sensor import Sensor
@@ -22,12 +23,12 @@ _PATH_STEP_US = 1000
 def _render_views(
     scene: Scene, config: EmulatorConfig, sensor: Sensor, poses: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    camera = config.camera
-    shape = (len(poses), camera.height, camera.width)
+    view = LensView(config.optics)
+    shape = (len(poses), config.height, config.width)
     hdr = np.empty((*shape, 3 if sensor.color_filter.is_color else 1), np.float32)
     depth = np.empty(shape, np.float32)
     for index, c2w in enumerate(poses):
-        radiance, depth[index] = scene.render(camera, c2w)
+        radiance, depth[index] = view.render(scene, c2w)
         hdr[index] = sensor_channels(radiance, sensor.color_filter)
     return hdr, depth
 

@@ -26,6 +26,7 @@ from davis_io.geometry import (
     colmap_from_opencv_intrinsics,
     opencv_from_colmap_intrinsics,
 )
+from davis_io.lens import Lens
 
 __all__ = [
     "DATABASE_NAME",
@@ -128,7 +129,7 @@ def extract_features(
     image_dir: Path,
     image_names: Sequence[str],
     *,
-    intrinsics: np.ndarray | None = None,
+    lens: Lens | None = None,
 ) -> Path:
     """Write SIFT features of ``image_names`` (one shared camera) to ``work_dir/database.db``.
 
@@ -136,8 +137,8 @@ def extract_features(
         work_dir: folder that keeps the database (created).
         image_dir: folder holding the images.
         image_names: file names inside ``image_dir``, in capture order.
-        intrinsics: known ``(fx, fy, cx, cy)`` in the session's pixel convention (pixel centres
-            at integers; pinhole, held fixed), or ``None`` to let COLMAP estimate one focal
+        lens: the camera's known lens (COLMAP's ``PINHOLE``, ``OPENCV`` or ``FULL_OPENCV``
+            model with its values, held fixed), or ``None`` to let COLMAP estimate one focal
             length (principal point at the centre, no distortion).
 
     Returns:
@@ -151,10 +152,9 @@ def extract_features(
     # One focal length and no distortion while unknown: a radial term with the focal length
     # collapses on the small baselines of a hand-held sweep.
     reader.camera_model = "SIMPLE_PINHOLE"
-    if intrinsics is not None:
-        reader.camera_model = "PINHOLE"
-        values = colmap_from_opencv_intrinsics(intrinsics)
-        reader.camera_params = ",".join(f"{value:.6f}" for value in values)
+    if lens is not None:
+        reader.camera_model, values = colmap_camera(lens)
+        reader.camera_params = ",".join(f"{value:.9g}" for value in values)
     extraction = pycolmap.FeatureExtractionOptions()
     extraction.use_gpu = False
     extraction.num_threads = 1  # images get their ids in order, not as threads finish
@@ -168,6 +168,17 @@ def extract_features(
         device=pycolmap.Device.cpu,
     )
     return database
+
+
+def colmap_camera(lens: Lens) -> tuple[str, list[float]]:
+    """COLMAP's camera model and parameters of ``lens`` (pixel centres moved to +0.5)."""
+    values = list(colmap_from_opencv_intrinsics(lens.intrinsics))
+    if lens.is_pinhole:
+        return "PINHOLE", values
+    coefficients = list(lens.coefficients)
+    if len(coefficients) == 4:
+        return "OPENCV", values + coefficients
+    return "FULL_OPENCV", values + coefficients + [0.0] * (8 - len(coefficients))
 
 
 def match_features(database: Path, matcher: Matcher) -> None:
@@ -261,6 +272,12 @@ def reconstruct(
     best = max(models.values(), key=lambda model: (_plausible(model), model.num_reg_images()))
     best.write(model_dir)
     return sparse_model_from(best)
+
+
+def model_points(model_dir: Path) -> np.ndarray:
+    """``(N, 3)`` 3-D points of the sparse model written in ``model_dir``."""
+    reconstruction = pycolmap.Reconstruction(str(model_dir))
+    return np.array([point.xyz for point in reconstruction.points3D.values()]).reshape(-1, 3)
 
 
 def sparse_model_from(reconstruction: pycolmap.Reconstruction) -> SparseModel:

@@ -12,8 +12,8 @@ import cv2
 import numpy as np
 
 from davis_io.calibration.session_calibration import session_calibration
-from davis_io.errors import UsageError
 from davis_io.geometry import interpolate_poses
+from davis_io.lens import COEFFICIENT_NAMES, Lens, read_camera_calibration
 from davis_io.poses.colmap import ColmapError, SparseModel
 from davis_io.poses.latent import calibrated_response, latent_images, sharpness
 from davis_io.poses.nerfstudio import latent_frame_name
@@ -33,7 +33,8 @@ from davis_io.session.writer import check_free_space, not_written
 __all__ = [
     "PoseReport",
     "estimate_poses",
-    "read_intrinsics",
+    "made_with",
+    "stated_lens",
 ]
 
 Progress = Callable[[str, int, int], None]
@@ -63,6 +64,8 @@ class PoseReport:
         latent_sensor: the sensor values the kept latent frames were made with (the
             calibration's source, ``given`` or ``nominal``).
         compared: what COLMAP said of each set of latent frames tried, by label.
+        distortion: OpenCV's coefficients of the lens the poses were made with (empty: a
+            pinhole).
     """
 
     registered: int
@@ -77,6 +80,7 @@ class PoseReport:
     bounds: np.ndarray
     latent_sensor: str = ""
     compared: dict = field(default_factory=dict)
+    distortion: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def registered_fraction(self) -> float:
@@ -92,7 +96,8 @@ class PoseReport:
                 f"({100 * self.registered_fraction:.1f}%) with strategy {self.strategy} "
                 f"(tried: {', '.join(self.tried)})",
                 f"mean reprojection error {self.reprojection_error_px:.3f} px",
-                "intrinsics fx {:.2f} fy {:.2f} cx {:.2f} cy {:.2f} px".format(*self.intrinsics),
+                "intrinsics fx {:.2f} fy {:.2f} cx {:.2f} cy {:.2f} px".format(*self.intrinsics)
+                + _distortion_text(self.distortion),
                 f"bounds near {self.bounds[0]:.3f} far {self.bounds[1]:.3f}",
                 f"contrast threshold {self.threshold:.3f} ({self.threshold_source})",
                 *self._comparison(),
@@ -123,10 +128,16 @@ class PoseReport:
         """Inverse of :meth:`to_json`."""
         data = dict(data)
         data.pop("test_c2w", None)  # written by earlier versions, from the truth
-        for key in ("track_counts", "intrinsics", "bounds"):
-            data[key] = np.asarray(data[key])
+        for key in ("track_counts", "intrinsics", "bounds", "distortion"):
+            data[key] = np.asarray(data.get(key, []))
         data["tried"] = tuple(data["tried"])
         return cls(**data)
+
+
+def _distortion_text(distortion: np.ndarray) -> str:
+    """``, k1 .. p2 ...`` of a distorted lens, nothing for a pinhole."""
+    named = zip(COEFFICIENT_NAMES, np.asarray(distortion, float).ravel(), strict=False)
+    return "".join(f", {name} {value:+.4g}" for name, value in named)
 
 
 def _check_room(folder: Path, latent_frames: int, height: int, width: int) -> None:
@@ -185,47 +196,11 @@ def _session_poses(model: SparseModel, names, split_us: np.ndarray) -> SessionPo
     )
 
 
-def read_intrinsics(path: Path | str) -> np.ndarray:
-    """Read ``(fx, fy, cx, cy)`` from JSON (keys fx, fy, cx, cy) or a text file of 4 numbers.
-
-    Raises:
-        UsageError: the file is missing or holds something else.
-    """
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as error:
-        raise UsageError(f"{path}: cannot read the intrinsics file ({error.strerror})") from None
-    try:
-        if path.suffix.lower() == ".json":
-            data = json.loads(text)
-            values = [float(data[key]) for key in ("fx", "fy", "cx", "cy")]
-        else:
-            values = [float(word) for word in text.replace(",", " ").split()]
-    except (ValueError, KeyError, TypeError) as error:
-        raise UsageError(
-            f"{path}: intrinsics must be JSON with fx, fy, cx, cy or four numbers ({error})"
-        ) from None
-    return _check_intrinsics(values)
-
-
-def _check_intrinsics(intrinsics) -> np.ndarray | None:
-    if intrinsics is None:
-        return None
-    values = np.asarray(intrinsics, float).reshape(-1)
-    if values.shape != (4,) or not np.all(np.isfinite(values)) or np.any(values[:2] <= 0):
-        raise UsageError(
-            f"intrinsics must be four numbers fx, fy, cx, cy in pixels with fx, fy > 0, got "
-            f"{values.tolist()}"
-        )
-    return values
-
-
 def estimate_poses(
     session: Session | Path | str,
     *,
     b: int = DEFAULT_BINS,
-    intrinsics: np.ndarray | None = None,
+    lens: Lens | None = None,
     force: bool = False,
     progress: Progress | None = None,
     threshold: float | None = None,
@@ -240,7 +215,8 @@ def estimate_poses(
     Args:
         session: an open :class:`~davis_io.session.Session` or its folder.
         b: bins per exposure (b+1 latent frames per frame).
-        intrinsics: known ``(fx, fy, cx, cy)`` in pixels (held fixed), or None to estimate.
+        lens: the camera's known lens (held fixed), or None to estimate a pinhole. Stored
+            poses made with another lens are estimated again.
         force: recompute even when poses for ``b`` and their report exist.
         progress: ``progress(stage, done, total)`` for a progress display.
         threshold: contrast threshold (natural-log units per event) for ON, OFF and every
@@ -258,20 +234,44 @@ def estimate_poses(
             return estimate_poses(
                 opened,
                 b=b,
-                intrinsics=intrinsics,
+                lens=lens,
                 force=force,
                 progress=progress,
                 threshold=threshold,
             )
     with writer_lock(session.folder, "estimating poses"):
-        return _estimate(session, b, _check_intrinsics(intrinsics), force, progress, threshold)
+        return _estimate(session, b, lens, force, progress, threshold)
 
 
-def _estimate(session, b, intrinsics, force, progress, threshold) -> PoseReport:
+def stated_lens(session: Path | str, calibration_file: Path | str) -> Lens:
+    """The lens a calibration file states for the camera of ``session``.
+
+    Raises:
+        UsageError: the file cannot be read or is for another image size.
+        SessionError: the session cannot be read.
+    """
+    with Session.open(session) as opened:
+        size = opened.width, opened.height
+    return read_camera_calibration(calibration_file, *size)
+
+
+def made_with(poses: SessionPoses, lens: Lens) -> bool:
+    """Whether ``poses`` were estimated with ``lens`` (its intrinsics and distortion)."""
+    stated = Lens.pinhole(lens.width, lens.height, poses.intrinsics).with_distortion(
+        poses.distortion
+    )
+    return stated.close_to(lens)
+
+
+def _estimate(session, b, lens, force, progress, threshold) -> PoseReport:
     progress = progress or (lambda _stage, _done, _total: None)
     work_dir = session.folder / "colmap"
     report_path = work_dir / "report.json"
-    if not force and session.poses(b) is not None and report_path.exists():
+    stored = session.poses(b)
+    if lens is not None:
+        lens = lens.for_size(session.width, session.height, "--camera-calibration")
+        force = force or (stored is not None and not made_with(stored, lens))
+    if not force and stored is not None and report_path.exists():
         return PoseReport.from_json(json.loads(report_path.read_text()))
     session.require_writable()
     if session.frame_count < 2:
@@ -292,7 +292,7 @@ def _estimate(session, b, intrinsics, force, progress, threshold) -> PoseReport:
         folder = work_dir if not trials and not failures else work_dir / label
         named = _labelled(progress, label) if len(candidates) > 1 else progress
         try:
-            trials.append(_reconstruct(session, b, label, calibration, folder, intrinsics, named))
+            trials.append(_reconstruct(session, b, label, calibration, folder, lens, named))
         except ColmapError as error:
             failures.append(error)
     if not trials:
@@ -315,6 +315,7 @@ def _estimate(session, b, intrinsics, force, progress, threshold) -> PoseReport:
         threshold=kept.calibration.threshold,
         threshold_source=kept.calibration.source,
         intrinsics=poses.intrinsics,
+        distortion=poses.distortion,
         bounds=poses.bounds,
         latent_sensor=kept.label,
         compared={trial.label: trial.colmap_says() for trial in trials},
@@ -397,7 +398,7 @@ def _labelled(progress: Progress, label: str) -> Progress:
     return named
 
 
-def _reconstruct(session, b, label, calibration, folder, intrinsics, progress) -> _Trial:
+def _reconstruct(session, b, label, calibration, folder, lens, progress) -> _Trial:
     bins = contrast_bins(session, b, calibration)
     names, scores = _write_latent_frames(
         session, bins, calibrated_response(calibration), folder / "images", progress
@@ -414,7 +415,7 @@ def _reconstruct(session, b, label, calibration, folder, intrinsics, progress) -
         folder / "images",
         names,
         scores,
-        intrinsics=intrinsics,
+        lens=lens,
         stage=lambda name: progress(name, 0, 0),
         on_image=on_image,
     )

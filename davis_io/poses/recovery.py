@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from davis_io.lens import Lens
 from davis_io.poses.colmap import (
     DATABASE_NAME,
     ColmapError,
@@ -147,7 +148,7 @@ def reconstruct_with_recovery(
     names: Sequence[Sequence[str]],
     sharpness: Sequence[Sequence[float]],
     *,
-    intrinsics: np.ndarray | None = None,
+    lens: Lens | None = None,
     stage: Callable[[str], None] | None = None,
     on_image: Callable[[], None] | None = None,
 ) -> Outcome:
@@ -158,7 +159,7 @@ def reconstruct_with_recovery(
         image_dir: folder of the latent frames.
         names: per view, its latent frame file names in time order.
         sharpness: per view, the sharpness of each latent frame.
-        intrinsics: known ``(fx, fy, cx, cy)`` or None.
+        lens: the camera's known lens (held fixed), or None to estimate a pinhole.
         stage: called with a stage name when a stage starts (progress display).
         on_image: called when an image registers (progress display).
 
@@ -171,11 +172,9 @@ def reconstruct_with_recovery(
     """
     stage = stage or (lambda _name: None)
     stage("features")
-    database = extract_features(
-        work_dir, image_dir, [n for view in names for n in view], intrinsics=intrinsics
-    )
+    database = extract_features(work_dir, image_dir, [n for view in names for n in view], lens=lens)
     best, tried, matched = None, [], None
-    mapping = {"fixed_intrinsics": intrinsics is not None, "on_image": on_image}
+    mapping = {"fixed_intrinsics": lens is not None, "on_image": on_image}
     for strategy in STRATEGIES:
         tried.append(strategy.name)
         if strategy.matcher is not matched:
@@ -188,7 +187,7 @@ def reconstruct_with_recovery(
             model = _map(strategy, images, work_dir, image_dir, names, sharpness, mapping)
         except ColmapError:
             continue
-        if not (model.plausible_camera or intrinsics is not None):  # a stated camera stands
+        if not (model.plausible_camera or lens is not None):  # a stated camera stands
             continue
         fraction = len(model.c2w) / len(images)
         if fraction >= REGISTERED_FRACTION:
@@ -199,7 +198,7 @@ def reconstruct_with_recovery(
         raise ColmapError(
             f"COLMAP could not reconstruct these frames (tried {', '.join(tried)}): they show "
             "too little texture, overlap or parallax. Record a scene with more visible detail, "
-            "move the camera around rather than only rotating it, or give known intrinsics "
-            "with --intrinsics"
+            "move the camera around rather than only rotating it, or give the camera's "
+            "calibration with --camera-calibration"
         )
     return Outcome(best[0], best[1], False, tuple(tried))

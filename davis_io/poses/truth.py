@@ -68,9 +68,11 @@ def store_true_poses(session_dir: Path, b: int) -> None:
 
     The true training poses (every sub-frame time of every exposure) are interpolated at the
     ``(F, b+1)`` latent time points and written with every pose marked registered, the truth's
-    intrinsics, no distortion, and depth bounds of the truth's depth range widened by 10 % each
-    way. Evaluation only: it lets a fit run on an emulated session without pose estimation.
+    intrinsics and its lens's distortion, and depth bounds of the truth's depth range widened by
+    10 % each way. Evaluation only: it lets a fit run on an emulated session without pose
+    estimation.
     """
+    from davis_io.emulator.lens_view import lens_distortion
     from davis_io.session.truth import load_truth
 
     with Session.open(session_dir) as session:
@@ -88,7 +90,7 @@ def store_true_poses(session_dir: Path, b: int) -> None:
                 latent.reshape(*split.shape, 4, 4),
                 np.ones(split.shape, bool),
                 truth.intrinsics,
-                np.zeros(0),
+                np.asarray(lens_distortion(truth.camera.get("lens", "pinhole"), truth.seed), float),
                 np.array([0.9 * near, 1.1 * far]),
             ),
         )

@@ -10,6 +10,7 @@ from pathlib import Path
 from davis_io.session import seconds_argument
 from seenerf.cli.options import add_dataclass_options, dataclass_values
 from seenerf.cli.progress import TrainingBar
+from seenerf.errors import OptionError
 from seenerf.model.config import FIELD_BOUNDS, FitConfig
 
 __all__ = ["FLAGS", "HELP", "add_arguments", "run"]
@@ -51,6 +52,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quiet", action="store_true", help="no progress bar or lines: the result only"
     )
+    parser.add_argument(
+        "--camera-calibration",
+        type=Path,
+        metavar="FILE",
+        help="the camera's lens: DV's or OpenCV's calibration (XML or YAML), COLMAP's "
+        "cameras.txt or JSON with fx, fy, cx, cy and optionally k1, k2, p1, p2, k3; poses are "
+        "estimated with it held fixed, and rays and renders follow it (default: COLMAP "
+        "estimates a pinhole)",
+    )
     add_dataclass_options(
         parser,
         FitConfig,
@@ -75,6 +85,11 @@ def run(args: argparse.Namespace) -> int:
         config = dataclasses.replace(load_config(args.config), **given).validate()
     else:
         config = FitConfig(**values).validate()
+    if args.ray is not None and args.camera_calibration is not None:
+        raise OptionError(
+            "--camera-calibration with --ray: estimate each session's poses first with "
+            "`seecap poses SESSION --camera-calibration FILE`, then fit them with --ray"
+        )
     if args.ray is None and len(args.session) == 1:
         return _fit_here(args.session[0], config, args)
     if args.ray is None:
@@ -104,6 +119,7 @@ def _fit_here(session: Path, config: FitConfig, args: argparse.Namespace) -> int
             run_name=args.run,
             fresh=args.fresh,
             log=bar.line,
+            camera_calibration=args.camera_calibration,
             on_step=lambda trainer: bar.update(trainer.training_progress()),
         )
     finally:
@@ -125,6 +141,7 @@ def _fit_in_turn(session: Path, config: FitConfig, args: argparse.Namespace):
             run_name=args.run,
             fresh=args.fresh,
             log=lambda text: bar.line(f"{session}: {text}"),
+            camera_calibration=args.camera_calibration,
             on_step=lambda trainer: bar.update(trainer.training_progress()),
         )
     finally:

@@ -43,13 +43,20 @@ def prepare_and_fit(
     fresh: bool = False,
     log: Callable[[str], None] = print,
     on_step: Callable[[Trainer], None] | None = None,
+    camera_calibration: Path | None = None,
 ) -> FitResult:
-    """Calibrate the sensor and estimate poses when missing, then fit (the budget counts both)."""
+    """Calibrate the sensor and estimate poses when missing, then fit (the budget counts both).
+
+    ``camera_calibration``: the lens's calibration file; poses made with another lens are
+    estimated again.
+    """
     book = LogBook(log)  # the calibration's and poses' lines go into the run's log.txt too
     threads, why = choose_threads(config.threads)
     limit_threads(threads)
     book(why)
-    spent_s = prepare_session(session_dir, session_bins(session_dir, config), book)
+    spent_s = prepare_session(
+        session_dir, session_bins(session_dir, config), book, camera_calibration
+    )
     return fit_session(
         session_dir,
         config,

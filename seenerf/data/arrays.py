@@ -9,7 +9,7 @@ one response curve (the first of the three).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -92,6 +92,8 @@ class TrainingData:
             point (:func:`davis_io.settled.settled_points`); None: everywhere.
         c2w: ``(F, b+1, 4, 4)`` camera-to-world per latent time point, OpenCV axes.
         intrinsics: ``(4,)`` fx, fy, cx, cy in pixels.
+        distortion: the lens's OpenCV coefficients ``k1, k2, p1, p2[, k3 ...]`` (empty: a
+            pinhole).
         bounds: ``(2,)`` near and far depth of the scene along the optical axis.
         mix: ``(H, W, 3)`` linear RGB weights each pixel sums (colour filter).
         channel: ``(H, W)`` int64 response-curve channel of each pixel.
@@ -126,6 +128,7 @@ class TrainingData:
     polarity_scale: tuple[float, float] = (1.0, 1.0)
     linear_levels: tuple[float, float] | None = None
     noise_offset: float = 0.0
+    distortion: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
     test: TestViews | None = None
     truth: TrainTruth | None = None
 

@@ -10,7 +10,7 @@ import torch
 from seenerf.data.arrays import TrainingData
 from seenerf.data.subframes import refine_exposure
 from seenerf.model.imaging import RayBatch
-from seenerf.render.rays import camera_rays
+from seenerf.render.rays import camera_rays, normalised_coordinates, rays_through
 
 __all__ = ["FrameSampler", "SharpTruthSampler"]
 
@@ -54,6 +54,20 @@ class FrameSampler:
         self.weights = torch.as_tensor(weights, device=device)
         self.c2w = torch.as_tensor(c2w, device=device)
         self.intrinsics = torch.as_tensor(data.intrinsics, device=device)
+        rows, columns = torch.meshgrid(
+            torch.arange(self.height, device=device),
+            torch.arange(self.width, device=device),
+            indexing="ij",
+        )
+        self.pixel_xy = torch.stack(
+            normalised_coordinates(
+                self.intrinsics,
+                columns.reshape(-1).float(),
+                rows.reshape(-1).float(),
+                torch.as_tensor(data.distortion, device=device),
+            ),
+            dim=-1,
+        )
         self.mix = torch.as_tensor(data.mix, device=device).reshape(-1, 3)
         self.channel = torch.as_tensor(data.channel, device=device).reshape(-1)
         self.bins = torch.as_tensor(data.bins if calibrated else data.bins_raw, device=device)
@@ -98,12 +112,8 @@ class FrameSampler:
         if self.correction is not None:
             c2w = self.correction(c2w, frame)
         poses = c2w.shape[1]
-        origins, directions = camera_rays(
-            c2w.reshape(-1, 4, 4),
-            self.intrinsics,
-            u.repeat_interleave(poses).float(),
-            v.repeat_interleave(poses).float(),
-        )
+        xy = self.pixel_xy[pixel].repeat_interleave(poses, dim=0)
+        origins, directions = rays_through(c2w.reshape(-1, 4, 4), xy[:, 0], xy[:, 1])
         return RayBatch(
             origins.reshape(-1, poses, 3),
             directions.reshape(-1, poses, 3),
@@ -124,15 +134,22 @@ class SharpTruthSampler:
     Args:
         c2w: ``(F, S, 4, 4)`` true poses; ``hdr`` ``(F, S, H, W, 3)`` sharp HDR.
         intrinsics: fx, fy, cx, cy.
+        distortion: the lens's OpenCV coefficients (empty: a pinhole).
     """
 
     def __init__(
-        self, c2w: np.ndarray, hdr: np.ndarray, intrinsics: np.ndarray, device: str = "cpu"
+        self,
+        c2w: np.ndarray,
+        hdr: np.ndarray,
+        intrinsics: np.ndarray,
+        distortion: np.ndarray,
+        device: str = "cpu",
     ):
         self.c2w = torch.as_tensor(c2w, dtype=torch.float32, device=device).reshape(-1, 4, 4)
         self.hdr = torch.as_tensor(hdr, dtype=torch.float32, device=device)
         self.hdr = self.hdr.reshape(-1, *self.hdr.shape[-3:])
         self.intrinsics = torch.as_tensor(intrinsics, dtype=torch.float32, device=device)
+        self.distortion = torch.as_tensor(distortion, dtype=torch.float32, device=device)
         self.scale = float(self.hdr.max())
 
     def sample(self, count: int, generator: torch.Generator):
@@ -146,5 +163,7 @@ class SharpTruthSampler:
         height, width = self.hdr.shape[1:3]
         image, pixel = flat // (height * width), flat % (height * width)
         v, u = pixel // width, pixel % width
-        origins, directions = camera_rays(self.c2w[image], self.intrinsics, u.float(), v.float())
+        origins, directions = camera_rays(
+            self.c2w[image], self.intrinsics, u.float(), v.float(), self.distortion
+        )
         return origins, directions, self.hdr[image, v, u]

@@ -104,6 +104,7 @@ def load_training_data(
             bins_raw=bins.raw[usable].astype(np.float32),
             c2w=c2w[usable].astype(np.float32),
             intrinsics=poses.intrinsics.astype(np.float32),
+            distortion=np.asarray(poses.distortion, np.float32),
             bounds=poses.bounds.astype(np.float32),
             mix=mix,
             channel=channel,

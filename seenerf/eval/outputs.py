@@ -38,7 +38,15 @@ def render_outputs(
     """
     poses, similarity = test_poses_in_fit_frame(data, model.in_truth_frame)
     exposures = bracket_exposures(config, data)
-    views = render_views(model, poses, data.intrinsics, data.image_size, exposures, data.monochrome)
+    views = render_views(
+        model,
+        poses,
+        data.intrinsics,
+        data.image_size,
+        exposures,
+        data.monochrome,
+        distortion=data.distortion,
+    )
     write_views(
         views,
         run_dir,
@@ -49,6 +57,7 @@ def render_outputs(
             "seecap_preset": config.preset,
             "seecap_units": "linear radiance, scale of the learned CRF anchor",
         },
+        distortion=data.distortion,
     )
     plot_crf(model, data, views, run_dir / "crf.png")
     metrics = {
@@ -66,7 +75,13 @@ def render_outputs(
         refined, registration = register_test_poses(model, data, poses)
         registered = score_views(
             render_views(
-                model, refined, data.intrinsics, data.image_size, exposures, data.monochrome
+                model,
+                refined,
+                data.intrinsics,
+                data.image_size,
+                exposures,
+                data.monochrome,
+                distortion=data.distortion,
             ),
             data,
             psnr_only=True,

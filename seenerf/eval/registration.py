@@ -82,6 +82,7 @@ def register_view(
     exposure_s: float,
     spec: RegistrationSpec = RegistrationSpec(),
     seed: int = 0,
+    distortion: np.ndarray | None = None,
 ) -> np.ndarray:
     """The pose near ``c2w`` whose rendering at ``exposure_s`` best matches ``target_ldr``.
 
@@ -94,6 +95,8 @@ def register_view(
         exposure_s: the image's exposure.
         spec: pyramid, steps and step sizes.
         seed: seed of the pixel subsets.
+        distortion: the lens's OpenCV coefficients (None or empty: a pinhole); the same at every
+            pyramid level, which scales pixels only.
 
     Returns:
         ``(4, 4)`` refined camera-to-world (float32).
@@ -112,6 +115,7 @@ def register_view(
     )
     base_lrs = [group["lr"] for group in optimiser.param_groups]
     generator = torch.Generator().manual_seed(seed)
+    lens = None if distortion is None else torch.as_tensor(distortion, device=device)
     was_training = model.training
     model.eval()
     frozen = [p.requires_grad for p in model.parameters()]
@@ -138,7 +142,7 @@ def register_view(
                 ).to(device)
                 v, u = (pixels // width).float(), (pixels % width).float()
                 moved = pose_update(pose, rotation, translation)
-                origins, directions = camera_rays(moved, k, u, v)
+                origins, directions = camera_rays(moved, k, u, v, lens)
                 log_radiance = model.render_log_radiance(origins, directions)
                 ldr = model.ldr_from_log(log_radiance, exposure_s)
                 truth = target.reshape(-1, target.shape[-1])[pixels]
@@ -180,6 +184,7 @@ def register_test_poses(
                 data.test.ldr[view, index],
                 float(exposures[index]),
                 seed=view,
+                distortion=data.distortion,
             )
             for view, pose in enumerate(c2w)
         ]

@@ -17,7 +17,7 @@ from seenerf.eval.export import (
     write_png,
 )
 from seenerf.model.model import SeeNerfModel
-from seenerf.render.rays import camera_rays
+from seenerf.render.rays import normalised_coordinates, rays_through
 
 __all__ = [
     "PAPER_EXPOSURES_S",
@@ -57,6 +57,7 @@ def render_log_image(
     intrinsics: np.ndarray,
     image_size: tuple[int, int],
     chunk: int = 4096,
+    distortion: np.ndarray | None = None,
 ) -> np.ndarray:
     """Rendered log radiance ``(H, W, 3)`` of one camera, in chunks of rays.
 
@@ -67,6 +68,8 @@ def render_log_image(
         image_size: ``(height, width)``.
         chunk: rays per rendering call; a few thousand keep the per-sample tensors in cache
             (32k-ray chunks were up to 9x slower on two busy cores).
+        distortion: the lens's OpenCV coefficients: the view is rendered in the camera's own
+            model (None or empty: a pinhole).
     """
     height, width = image_size
     parameter = next(model.parameters())
@@ -75,12 +78,11 @@ def render_log_image(
     v, u = torch.meshgrid(
         torch.arange(height, device=k.device), torch.arange(width, device=k.device), indexing="ij"
     )
-    u, v = u.reshape(-1).float(), v.reshape(-1).float()
+    lens = None if distortion is None else torch.as_tensor(distortion, device=k.device)
+    x, y = normalised_coordinates(k, u.reshape(-1).float(), v.reshape(-1).float(), lens)
     out = []
-    for start in range(0, u.numel(), chunk):
-        origins, directions = camera_rays(
-            pose, k, u[start : start + chunk], v[start : start + chunk]
-        )
+    for start in range(0, x.numel(), chunk):
+        origins, directions = rays_through(pose, x[start : start + chunk], y[start : start + chunk])
         out.append(model.render_log_radiance(origins, directions))
     return torch.cat(out).reshape(height, width, 3).cpu().numpy()
 
@@ -93,13 +95,19 @@ def render_views(
     image_size: tuple[int, int],
     exposures_s: tuple[float, ...],
     monochrome: bool,
+    distortion: np.ndarray | None = None,
 ) -> RenderedViews:
-    """HDR and LDR images of each pose; a monochrome sensor's views are luminance ``(H, W, 1)``."""
+    """HDR and LDR images of each pose; a monochrome sensor's views are luminance ``(H, W, 1)``.
+
+    ``distortion``: the lens's OpenCV coefficients (None or empty: a pinhole).
+    """
     model.eval()
     views = RenderedViews(np.asarray(c2w), tuple(exposures_s), ldr=[[] for _ in exposures_s])
     start = time.perf_counter()
     for pose in views.c2w:
-        log_image = torch.as_tensor(render_log_image(model, pose, intrinsics, image_size))
+        log_image = torch.as_tensor(
+            render_log_image(model, pose, intrinsics, image_size, distortion=distortion)
+        )
         if monochrome:
             hdr = model.hdr_from_log(log_image).numpy() @ _LUMINANCE
             log_lum = torch.log(torch.as_tensor(hdr).clamp(min=1e-30))[..., None].expand(-1, -1, 3)
@@ -120,8 +128,12 @@ def write_views(
     intrinsics: np.ndarray,
     image_size: tuple[int, int],
     metadata: dict,
+    distortion: np.ndarray | None = None,
 ) -> None:
-    """EXR + tone-mapped PNG per view, LDR PNGs per exposure, and ``transforms.json``."""
+    """EXR + tone-mapped PNG per view, LDR PNGs per exposure, and ``transforms.json``.
+
+    ``distortion``: the lens's OpenCV coefficients the views were rendered with (None: none).
+    """
     names = []
     for index, hdr in enumerate(views.hdr):
         name = f"{index:03d}"
@@ -132,5 +144,11 @@ def write_views(
         names.append(f"renders/hdr/{name}.png")
     write_json(
         run_dir / "transforms.json",
-        nerfstudio_transforms(views.c2w, intrinsics, np.zeros(0), image_size, names),
+        nerfstudio_transforms(
+            views.c2w,
+            intrinsics,
+            np.zeros(0) if distortion is None else distortion,
+            image_size,
+            names,
+        ),
     )

@@ -269,7 +269,9 @@ class SharpTruthMethod(Method):
     def __init__(self, model, data, config, preset, device):
         super().__init__(model, data, config, preset, device)
         truth = data.truth
-        self.truth = SharpTruthSampler(truth.c2w, truth.sharp_hdr, data.intrinsics, device)
+        self.truth = SharpTruthSampler(
+            truth.c2w, truth.sharp_hdr, data.intrinsics, data.distortion, device
+        )
 
     def step(self, generator: torch.Generator) -> Step:
         """The loss terms of a batch of sharp truth pixels."""

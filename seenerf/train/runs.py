@@ -141,6 +141,7 @@ def render_run(
         run.data.image_size,
         tuple(exposures),
         monochrome=run.data.monochrome,
+        distortion=run.data.distortion,
     )
     out_dir = run.run_dir / out_name
     write_views(
@@ -149,6 +150,7 @@ def render_run(
         run.data.intrinsics,
         run.data.image_size,
         {"seecap_variant": run.config.variant, "seecap_path": str(path or "held-out views")},
+        distortion=run.data.distortion,
     )
     if video is not None:
         write_video(video, video_frames(views, exposures_s[0] if exposures_s else None))
