@@ -145,6 +145,15 @@ def test_nerfstudio_export_reads_back_in_its_own_conventions(twins, tmp_path):
     assert (u, v) == pytest.approx((fx * 0.3 / 4.0 + cx, fy * -0.2 / 4.0 + cy))
     image = cv2.imread(str(path.parent / first["file_path"]), cv2.IMREAD_UNCHANGED)
     assert image.shape == (130, 173)  # monochrome latent frames stay grey
+    # COLMAP's points, as nerfstudio's methods that start from them read them.
+    assert payload["ply_file_path"] == "sparse_pc.ply"
+    ply = (path.parent / "sparse_pc.ply").read_text().splitlines()
+    count = int(next(line for line in ply if line.startswith("element vertex")).split()[-1])
+    rows = ply[ply.index("end_header") + 1 :]
+    assert count == len(rows) > 100
+    points = np.array([[float(word) for word in row.split()[:3]] for row in rows])
+    depth = (np.linalg.inv(poses.c2w[frame, index]) @ np.c_[points, np.ones(count)].T)[2]
+    assert np.median(depth) > 0  # the scene lies in front of the camera that saw it
 
 
 def _exr_pixels(path):

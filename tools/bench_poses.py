@@ -20,8 +20,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 from davis_io.emulator import EmulatedCamera
 from davis_io.poses import estimate_poses
 from davis_io.poses.truth import compare_with_truth
@@ -64,13 +62,7 @@ def run(
         save_truth(camera.truth, folder / "truth")
         recording_s = time.perf_counter() - started
         config = camera.config
-        intrinsics = (
-            None
-            if unknown_intrinsics
-            else np.array(
-                [config.focal_px, config.focal_px, (config.width - 1) / 2, (config.height - 1) / 2]
-            )
-        )
+        lens = None if unknown_intrinsics else config.optics
         stages: dict[str, float] = {}
         clock = {"stage": None, "at": time.perf_counter()}
 
@@ -82,9 +74,7 @@ def run(
                 clock.update(stage=stage, at=now)
 
         started = time.perf_counter()
-        report = estimate_poses(
-            folder, b=bins, intrinsics=intrinsics, force=True, progress=progress
-        )
+        report = estimate_poses(folder, b=bins, lens=lens, force=True, progress=progress)
         total = time.perf_counter() - started
         progress("done", 0, 0)
         with Session.open(folder) as session:

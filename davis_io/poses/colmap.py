@@ -10,6 +10,7 @@ the threads' timing. On 2 cores 80 latent frames take about 45 s instead of 27 s
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import shutil
 import signal
@@ -107,6 +108,7 @@ class SparseModel:
         plausible_camera: whether the camera passes COLMAP's own sanity bounds (focal length
             0.1 to 10 times the larger image side, small distortion terms); a degenerate model
             of a few images can drift far outside them.
+        folder: where COLMAP's files of the model are (None: not written).
     """
 
     c2w: dict[str, np.ndarray]
@@ -117,6 +119,7 @@ class SparseModel:
     bounds: np.ndarray = field(default_factory=lambda: np.zeros(2))
     reprojection_error_px: float = 0.0
     plausible_camera: bool = True
+    folder: Path | None = None
 
 
 def _quiet() -> None:
@@ -271,7 +274,7 @@ def reconstruct(
         )
     best = max(models.values(), key=lambda model: (_plausible(model), model.num_reg_images()))
     best.write(model_dir)
-    return sparse_model_from(best)
+    return dataclasses.replace(sparse_model_from(best), folder=model_dir)
 
 
 def model_points(model_dir: Path) -> np.ndarray:

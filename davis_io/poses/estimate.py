@@ -66,6 +66,7 @@ class PoseReport:
         compared: what COLMAP said of each set of latent frames tried, by label.
         distortion: OpenCV's coefficients of the lens the poses were made with (empty: a
             pinhole).
+        sparse_model: the kept model's folder inside ``colmap/`` ("" when unknown).
     """
 
     registered: int
@@ -81,6 +82,7 @@ class PoseReport:
     latent_sensor: str = ""
     compared: dict = field(default_factory=dict)
     distortion: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sparse_model: str = ""
 
     @property
     def registered_fraction(self) -> float:
@@ -132,6 +134,13 @@ class PoseReport:
             data[key] = np.asarray(data.get(key, []))
         data["tried"] = tuple(data["tried"])
         return cls(**data)
+
+
+def _inside(folder: Path | None, trial_folder: Path) -> str:
+    """``folder`` relative to its trial's folder (which becomes ``colmap/``), or ""."""
+    if folder is None:
+        return ""
+    return folder.relative_to(trial_folder).as_posix()
 
 
 def _distortion_text(distortion: np.ndarray) -> str:
@@ -318,6 +327,7 @@ def _estimate(session, b, lens, force, progress, threshold) -> PoseReport:
         distortion=poses.distortion,
         bounds=poses.bounds,
         latent_sensor=kept.label,
+        sparse_model=_inside(model.folder, kept.folder),
         compared={trial.label: trial.colmap_says() for trial in trials},
     )
     report_path.write_text(json.dumps(report.to_json(), indent=1))

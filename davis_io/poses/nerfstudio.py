@@ -59,8 +59,8 @@ def export_nerfstudio(session_dir: Path | str, out_dir: Path | str, b: int = DEF
         names.append(f"images/{name}")
         c2w.append(poses.c2w[frame, point])
     payload = nerfstudio_transforms(c2w, poses.intrinsics, poses.distortion, size, names)
-    model = session_dir / "colmap" / "sparse" / _kept_strategy(session_dir)
-    if (model / "points3D.bin").is_file():
+    model = _kept_model(session_dir)
+    if model is not None:
         write_ply(out_dir / POINTS_NAME, model_points(model))
         payload["ply_file_path"] = POINTS_NAME
     path = out_dir / "transforms.json"
@@ -68,12 +68,14 @@ def export_nerfstudio(session_dir: Path | str, out_dir: Path | str, b: int = DEF
     return path
 
 
-def _kept_strategy(session_dir: Path) -> str:
-    """The recovery strategy whose model gave the poses (``colmap/report.json``), or ""."""
+def _kept_model(session_dir: Path) -> Path | None:
+    """The folder of the COLMAP model that gave the poses (``colmap/report.json``), or None."""
     try:
-        return str(json.loads((session_dir / "colmap" / "report.json").read_text())["strategy"])
-    except (OSError, ValueError, KeyError):
-        return ""
+        report = json.loads((session_dir / "colmap" / "report.json").read_text())
+    except (OSError, ValueError):
+        return None
+    folder = session_dir / "colmap" / str(report.get("sparse_model", ""))
+    return folder if report.get("sparse_model") and (folder / "points3D.bin").is_file() else None
 
 
 def write_ply(path: Path, points: np.ndarray) -> Path:

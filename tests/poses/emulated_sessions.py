@@ -1,8 +1,7 @@
 """Emulated sessions with truth for the pose tests and what a calibration of the camera gives."""
 
-import numpy as np
-
 from davis_io.emulator import EmulatedCamera
+from davis_io.lens import Lens
 from davis_io.session.recorder import record
 from davis_io.session.truth import save_truth
 
@@ -11,11 +10,16 @@ REDUCED = {"frames": 8, "test_views": 2, "baseline_m": 0.18}
 positions spread like the 16-view benchmark's 4 x 4 grid (the slow test runs that one)."""
 
 
-def calibrated_intrinsics(camera: EmulatedCamera) -> np.ndarray:
+def calibrated_lens(camera: EmulatedCamera) -> Lens:
     """A calibration of the emulated camera: its focal length, principal point at the centre."""
     config = camera.config
-    return np.array(
-        [config.focal_px, config.focal_px, (config.width - 1) / 2, (config.height - 1) / 2]
+    return Lens(
+        config.width,
+        config.height,
+        config.focal_px,
+        config.focal_px,
+        (config.width - 1) / 2,
+        (config.height - 1) / 2,
     )
 
 
@@ -23,4 +27,4 @@ def record_emulated(folder, **settings):
     camera = EmulatedCamera(**settings)
     record(camera, folder, bins=4)
     save_truth(camera.truth, folder / "truth")
-    return folder, calibrated_intrinsics(camera)
+    return folder, calibrated_lens(camera)

@@ -5,9 +5,10 @@ import cv2
 import numpy as np
 import pycolmap
 import pytest
-from pose_scenes import INTRINSICS, orbit_poses, render_box, texture
+from pose_scenes import HEIGHT, INTRINSICS, WIDTH, orbit_poses, render_box, texture
 
 from davis_io.geometry import align_poses, rotation_error_deg
+from davis_io.lens import Lens
 from davis_io.poses import recovery
 from davis_io.poses.colmap import ColmapError, SparseModel, sparse_model_from
 from davis_io.poses.recovery import reconstruct_with_recovery
@@ -33,7 +34,7 @@ def test_box_views_reconstruct_at_their_known_poses(tmp_path):
         tmp_path / "images",
         names,
         [[1.0]] * 8,
-        intrinsics=INTRINSICS,
+        lens=Lens.pinhole(WIDTH, HEIGHT, INTRINSICS),
         stage=stages.append,
     )
     assert outcome.strategy == "exhaustive" and outcome.succeeded

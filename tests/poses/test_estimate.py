@@ -7,7 +7,6 @@ from emulated_sessions import record_emulated
 from davis_io.cli import main
 from davis_io.errors import UsageError
 from davis_io.poses import ColmapError, estimate_poses
-from davis_io.poses.estimate import read_intrinsics
 from davis_io.poses.truth import compare_with_truth
 from davis_io.session import Session
 from davis_io.session.truth import load_truth
@@ -15,8 +14,8 @@ from davis_io.session.truth import load_truth
 
 @pytest.fixture(scope="module")
 def estimated(emulated_session):
-    folder, intrinsics = emulated_session
-    report = estimate_poses(folder, b=4, intrinsics=intrinsics, force=True)
+    folder, lens = emulated_session
+    report = estimate_poses(folder, b=4, lens=lens, force=True)
     return folder, report
 
 
@@ -42,8 +41,8 @@ def test_emulated_session_meets_the_pose_acceptance(estimated):
 @pytest.mark.slow
 def test_full_benchmark_session_meets_the_pose_acceptance(tmp_path):
     # The benchmark session: 16 views x 5 latent frames at 346 x 260, the emulator's defaults.
-    folder, intrinsics = record_emulated(tmp_path / "room16", frames=16, test_views=2)
-    report = estimate_poses(folder, b=4, intrinsics=intrinsics)
+    folder, lens = record_emulated(tmp_path / "room16", frames=16, test_views=2)
+    report = estimate_poses(folder, b=4, lens=lens)
     assert report.registered_fraction >= 0.95
     with Session.open(folder) as session:
         errors = compare_with_truth(
@@ -96,17 +95,6 @@ def test_a_sensor_that_cannot_be_measured_is_one_warning_line(textureless_sessio
     err = capsys.readouterr().err
     assert "seecap: warning: the sensor could not be measured" in err
     assert "UserWarning" not in err and "Traceback" not in err
-
-
-def test_read_intrinsics(tmp_path):
-    (tmp_path / "k.json").write_text('{"fx": 280, "fy": 281, "cx": 172.5, "cy": 129.5}')
-    (tmp_path / "k.txt").write_text("280 281\n172.5 129.5\n")
-    assert np.allclose(read_intrinsics(tmp_path / "k.json"), [280, 281, 172.5, 129.5])
-    assert np.allclose(read_intrinsics(tmp_path / "k.txt"), [280, 281, 172.5, 129.5])
-    (tmp_path / "bad.txt").write_text("280 -1 3")
-    for bad in ("bad.txt", "missing.json"):
-        with pytest.raises(UsageError):
-            read_intrinsics(tmp_path / bad)
 
 
 def test_a_disk_too_small_for_colmap_is_refused_before_it_starts(
@@ -163,7 +151,7 @@ def test_poses_keep_the_better_of_the_measured_and_the_nominal_latent_frames(
     flat = [name for view in names for name in view]
     made_with = {}
 
-    def reconstruct(session, b, label, calibration, folder, intrinsics, progress):
+    def reconstruct(session, b, label, calibration, folder, lens, progress):
         """COLMAP as it might answer: the nominal frames register 18 of 18, the measured 12."""
         made_with[label] = calibration.threshold
         (folder / "images").mkdir(parents=True, exist_ok=True)
@@ -194,3 +182,50 @@ def test_poses_keep_the_better_of_the_measured_and_the_nominal_latent_frames(
     assert not (colmap / "nominal").exists()
     saved = json.loads((colmap / "report.json").read_text())
     assert saved["latent_sensor"] == "nominal" and set(saved["compared"]) == {"measured", "nominal"}
+
+
+def test_poses_made_with_another_lens_are_estimated_again(textureless_session, monkeypatch):
+    import davis_io.poses.estimate as estimate
+    from davis_io.lens import Lens
+    from davis_io.poses.colmap import SparseModel
+    from davis_io.poses.nerfstudio import latent_frame_name
+    from davis_io.poses.recovery import Outcome
+    from davis_io.session import SensorCalibration
+
+    b = 2
+    with Session.open(textureless_session) as session:
+        session.write_calibration(SensorCalibration(0.3, 0.3))
+        split_us, frames = session.bins(b).split_us, session.frame_count
+    names = [[latent_frame_name(i, k) for k in range(b + 1)] for i in range(frames)]
+    lenses = []
+
+    def reconstruct(session, b, label, calibration, folder, lens, progress):
+        """COLMAP holding the given lens fixed: its model has the lens's values."""
+        lenses.append(lens)
+        (folder / "images").mkdir(parents=True, exist_ok=True)
+        model = SparseModel(
+            c2w={name: np.eye(4) for view in names for name in view},
+            intrinsics=lens.intrinsics,
+            distortion=np.asarray(lens.distortion),
+            points=np.zeros((10, 3)),
+            bounds=np.array([1.0, 3.0]),
+        )
+        outcome = Outcome(model, "exhaustive", True, ("exhaustive",))
+        return estimate._Trial(label, calibration, folder, names, split_us, outcome)
+
+    monkeypatch.setattr(estimate, "_reconstruct", reconstruct)
+    first = Lens(64, 48, 50.0, 50.0, 31.5, 23.5, (-0.1, 0.01, 0.0, 0.0))
+    estimate_poses(textureless_session, b=b, lens=first, force=True)
+    estimate_poses(textureless_session, b=b, lens=first)  # the same lens: the poses stand
+    assert lenses == [first]
+    second = first.with_distortion((-0.2, 0.02))
+    report = estimate_poses(textureless_session, b=b, lens=second)
+    assert lenses == [first, second]
+    assert "k1 -0.2, k2 +0.02" in report.summary()
+    with Session.open(textureless_session) as session:
+        assert np.allclose(session.poses(b).distortion, [-0.2, 0.02])
+    other_size = Lens(346, 260, 280.0, 280.0, 172.5, 129.5)
+    with pytest.raises(
+        UsageError, match="calibration is for 346x260 images, the camera's are 64x48"
+    ):
+        estimate_poses(textureless_session, b=b, lens=other_size)
