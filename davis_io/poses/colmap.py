@@ -277,6 +277,45 @@ def reconstruct(
     return dataclasses.replace(sparse_model_from(best), folder=model_dir)
 
 
+RADIAL_LENS = "RADIAL"
+"""COLMAP's model of an unknown lens, fitted once the mapping with a pinhole is done: a focal
+length and two radial terms (the principal point stays at the centre)."""
+
+RADIAL_NO_WORSE = 1.01
+"""Largest ratio of the radial model's mean reprojection error to the pinhole's it is kept at."""
+
+
+def with_radial_lens(model: SparseModel) -> SparseModel:
+    """The model bundle-adjusted again with a radial lens, or ``model`` when that does not serve.
+
+    Mapping starts from a pinhole: a radial term estimated with the focal length from the first
+    pair collapses on the short baselines of a hand-held sweep. From the finished model it is
+    well posed, and recovers a small lens's barrel distortion and the focal length it had
+    inflated. The radial model is kept (written over the model's folder) when its camera is
+    plausible and its reprojection error is no worse.
+    """
+    if model.folder is None or model.distortion.size:
+        return model
+    _quiet()
+    reconstruction = pycolmap.Reconstruction(str(model.folder))
+    camera = next(iter(reconstruction.cameras.values()))
+    focal, cx, cy = (float(v) for v in camera.params[:3])
+    camera.model = getattr(pycolmap.CameraModelId, RADIAL_LENS)
+    camera.params = [focal, cx, cy, 0.0, 0.0]
+    reconstruction.cameras[camera.camera_id] = camera
+    options = pycolmap.BundleAdjustmentOptions()
+    options.refine_focal_length = True
+    options.refine_extra_params = True
+    options.refine_principal_point = False
+    options.print_summary = False
+    pycolmap.bundle_adjustment(reconstruction, options)
+    error = reconstruction.compute_mean_reprojection_error()
+    if not (_plausible(reconstruction) and error <= RADIAL_NO_WORSE * model.reprojection_error_px):
+        return model
+    reconstruction.write(model.folder)
+    return dataclasses.replace(sparse_model_from(reconstruction), folder=model.folder)
+
+
 def model_points(model_dir: Path) -> np.ndarray:
     """``(N, 3)`` 3-D points of the sparse model written in ``model_dir``."""
     reconstruction = pycolmap.Reconstruction(str(model_dir))

@@ -38,6 +38,7 @@ from davis_io.poses.colmap import (
     extract_features,
     match_features,
     reconstruct,
+    with_radial_lens,
 )
 
 __all__ = [
@@ -159,7 +160,8 @@ def reconstruct_with_recovery(
         image_dir: folder of the latent frames.
         names: per view, its latent frame file names in time order.
         sharpness: per view, the sharpness of each latent frame.
-        lens: the camera's known lens (held fixed), or None to estimate a pinhole.
+        lens: the camera's known lens (held fixed), or None to estimate one: a pinhole while
+            mapping, then a radial lens where it fits better (:func:`with_radial_lens`).
         stage: called with a stage name when a stage starts (progress display).
         on_image: called when an image registers (progress display).
 
@@ -191,7 +193,7 @@ def reconstruct_with_recovery(
             continue
         fraction = len(model.c2w) / len(images)
         if fraction >= REGISTERED_FRACTION:
-            return Outcome(model, strategy.name, True, tuple(tried))
+            return Outcome(_lens_of(model, lens, stage), strategy.name, True, tuple(tried))
         if best is None or fraction > best[2]:
             best = (model, strategy.name, fraction)
     if best is None or best[2] < MINIMUM_FRACTION or len(best[0].c2w) < 3:
@@ -201,4 +203,12 @@ def reconstruct_with_recovery(
             "move the camera around rather than only rotating it, or give the camera's "
             "calibration with --camera-calibration"
         )
-    return Outcome(best[0], best[1], False, tuple(tried))
+    return Outcome(_lens_of(best[0], lens, stage), best[1], False, tuple(tried))
+
+
+def _lens_of(model: SparseModel, lens: Lens | None, stage: Callable[[str], None]) -> SparseModel:
+    """The model as kept: its stated lens, or a radial lens estimated where it fits better."""
+    if lens is not None:
+        return model
+    stage("lens")
+    return with_radial_lens(model)

@@ -120,3 +120,19 @@ def test_recovery_passes_over_a_model_with_an_implausible_camera(tmp_path, monke
     outcome = reconstruct_with_recovery(tmp_path, tmp_path, names, [[0.0, 1.0]] * 4)
     assert (outcome.strategy, outcome.tried) == ("all-at-once", ("exhaustive", "all-at-once"))
     assert sorted(outcome.model.c2w) == sorted(every)
+
+
+def test_an_unknown_pinhole_is_estimated_as_one(tmp_path):
+    poses = orbit_poses(8)
+    names = write_views(tmp_path / "images", poses)
+    stages = []
+    outcome = reconstruct_with_recovery(
+        tmp_path / "colmap", tmp_path / "images", names, [[1.0]] * 8, stage=stages.append
+    )
+    assert stages[-1] == "lens"
+    model = outcome.model
+    # The radial lens fitted after mapping finds no distortion in pinhole renders (or is not
+    # kept), and the focal length the mapping estimated stays within half a percent.
+    assert np.all(np.abs(model.distortion) < 0.01)
+    assert model.intrinsics[0] == pytest.approx(INTRINSICS[0], rel=5e-3)
+    assert (model.folder / "cameras.bin").is_file()
