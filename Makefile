@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 TORCH_PIN ?= torch==2.13.0
 DEMO_DIR ?= demo-session
 
-.PHONY: install demo test fuzz browser bench bench-quick bench-blind bench-cluster lint clean
+.PHONY: install demo test fuzz browser bench bench-quick bench-blind bench-cluster bench-lens lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -47,6 +47,7 @@ RAY_OPTION = $(if $(RAY),--ray $(RAY))
 bench: $(STAMP)
 	$(BIN)/python tools/bench.py --publish $(RAY_OPTION)
 	$(BIN)/python tools/bench_blind.py --jobs 2 --publish $(RAY_OPTION)
+	$(BIN)/python tools/bench_lens.py --publish
 
 # The blind-camera benchmark alone: six randomly drawn sensors, each fitted from its recording.
 bench-blind: $(STAMP)
@@ -55,6 +56,10 @@ bench-blind: $(STAMP)
 # The quick plan locally, then on a local Ray instance: wall times and scores side by side.
 bench-cluster: $(STAMP)
 	$(BIN)/python tools/bench_cluster.py --publish
+
+# One scene through an undistorted and a distorted lens: the lens known, estimated or ignored.
+bench-lens: $(STAMP)
+	$(BIN)/python tools/bench_lens.py --publish
 
 lint: $(STAMP)
 	$(BIN)/pip install -q ruff
