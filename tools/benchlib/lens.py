@@ -16,7 +16,8 @@ LENS_CASES = {
 def _lens(case: dict) -> str:
     fx = case["intrinsics"][0]
     terms = ", ".join(
-        f"{name} {value:+.3f}" for name, value in zip(("k1", "k2", "p1", "p2"), case["distortion"])
+        f"{name} {value:+.3f}"
+        for name, value in zip(("k1", "k2", "p1", "p2"), case["distortion"], strict=False)
     )
     return f"f {fx:.1f}" + (f", {terms}" if terms else ", none")
 
