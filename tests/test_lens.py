@@ -195,3 +195,20 @@ def test_nerfstudio_transforms_carry_the_lens():
     )
     assert with_k3["k3"] == 0.01
     json.dumps(with_k3)
+
+
+def test_a_recording_keeps_the_lens_it_was_given_and_refuses_one_for_another_camera(tmp_path):
+    from davis_io.emulator import EmulatedCamera
+    from davis_io.session import Session
+    from davis_io.session.recorder import record
+
+    small = {"frames": 2, "test_views": 0, "width": 64, "height": 48, "focal_px": 50.0}
+    (tmp_path / "lens.json").write_text('{"fx": 50, "fy": 51, "cx": 31.5, "cy": 23.5, "k1": -0.1}')
+    record(EmulatedCamera(**small), tmp_path / "s", camera_calibration=tmp_path / "lens.json")
+    with Session.open(tmp_path / "s") as session:
+        stated = Lens.from_json(session.manifest.lens)
+    assert stated == Lens(64, 48, 50.0, 51.0, 31.5, 23.5, (-0.1,))
+    write_camera_calibration(DAVIS_LENS, tmp_path / "davis.xml", "DAVIS346_00000499")
+    with pytest.raises(UsageError, match="for 346x260 images, the camera's are 64x48"):
+        record(EmulatedCamera(**small), tmp_path / "t", camera_calibration=tmp_path / "davis.xml")
+    assert not (tmp_path / "t").exists()  # refused before anything was recorded

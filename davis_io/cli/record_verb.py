@@ -86,6 +86,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --replay: the sensor's colour filter, for a file of demosaiced colour frames "
         "that does not state it (a colour DAVIS346 is RGGB)",
     )
+    parser.add_argument(
+        "--camera-calibration",
+        type=Path,
+        metavar="FILE",
+        help="the camera's lens, stored with the session for its poses and fit: DV's or "
+        "OpenCV's calibration (XML or YAML), COLMAP's cameras.txt or JSON with fx, fy, cx, cy",
+    )
     parser.add_argument("--overwrite", action="store_true", help="replace an existing session")
     parser.add_argument(
         "--preview", type=Path, help="PNG refreshed with the newest frame and its events"
@@ -140,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
         overwrite=args.overwrite,
         status_callback=printer,
         preview=args.preview,
+        camera_calibration=args.camera_calibration,
     )
     if printer.live:
         print(file=sys.stderr)  # end the status line

@@ -224,8 +224,9 @@ def estimate_poses(
     Args:
         session: an open :class:`~davis_io.session.Session` or its folder.
         b: bins per exposure (b+1 latent frames per frame).
-        lens: the camera's known lens (held fixed), or None to estimate a pinhole. Stored
-            poses made with another lens are estimated again.
+        lens: the camera's known lens (held fixed), or None for the one the session was
+            recorded with (``session.json``'s ``lens``) or, without one, an estimated lens.
+            Stored poses made with another lens are estimated again.
         force: recompute even when poses for ``b`` and their report exist.
         progress: ``progress(stage, done, total)`` for a progress display.
         threshold: contrast threshold (natural-log units per event) for ON, OFF and every
@@ -277,6 +278,8 @@ def _estimate(session, b, lens, force, progress, threshold) -> PoseReport:
     work_dir = session.folder / "colmap"
     report_path = work_dir / "report.json"
     stored = session.poses(b)
+    if lens is None and session.manifest.lens is not None:
+        lens = Lens.from_json(session.manifest.lens, f"{session.folder}/session.json")
     if lens is not None:
         lens = lens.for_size(session.width, session.height, "--camera-calibration")
         force = force or (stored is not None and not made_with(stored, lens))

@@ -14,6 +14,7 @@ import h5py
 import numpy as np
 
 from davis_io.errors import SessionError
+from davis_io.lens import Lens
 from davis_io.session.layout import EVENT_FIELDS, FILE_FORMAT, H5_NAME, create_image_dataset
 from davis_io.session.lock import writer_lock
 from davis_io.session.manifest import (
@@ -101,6 +102,7 @@ def _summary(session: Session) -> dict:
         "folder": str(session.folder),
         "camera": f"{manifest.camera} serial {manifest.serial or '?'}",
         "resolution": f"{manifest.width}x{manifest.height} ({manifest.color_filter})",
+        "lens": _lens(manifest.lens),
         "source": manifest.source,
         "started_utc": manifest.start_time_utc,
         "stopped_utc": manifest.stop_time_utc,
@@ -117,6 +119,13 @@ def _summary(session: Session) -> dict:
         "calibration": _calibration(session),
         "truth": str(session.truth_dir) if session.truth_dir else None,
     }
+
+
+def _lens(stated: dict | None) -> str:
+    """The lens the recording states, or that it states none."""
+    if stated is None:
+        return "not stated (the poses estimate one; --camera-calibration gives it)"
+    return Lens.from_json(stated).summary()
 
 
 def _calibration(session: Session) -> dict | None:

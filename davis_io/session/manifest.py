@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from davis_io import __version__
-from davis_io.errors import SessionError
+from davis_io.errors import SessionError, UsageError
+from davis_io.lens import Lens
 from davis_io.session.bounds import Bounds
 from davis_io.session.defaults import BINS
 from davis_io.types import ColorFilter, SourceInfo
@@ -88,6 +89,8 @@ class SessionManifest:
         event_gaps_us: ``[start, end]`` of every gap in the event stream, µs: no event
             anywhere for far longer than its rate allows (:mod:`davis_io.gaps`); None when the
             recorder did not look (older sessions: found from the events when read).
+        lens: the camera's lens as its calibration file stated it at recording time
+            (:meth:`davis_io.lens.Lens.to_json`), or None when none was given.
         format_version: session format version (1).
         tool_version: seecap version that wrote the session.
     """
@@ -113,6 +116,7 @@ class SessionManifest:
     event_count: int = 0
     drops: DropCounters = field(default_factory=DropCounters)
     event_gaps_us: list[list[int]] | None = None
+    lens: dict | None = None
     format_version: int = FORMAT_VERSION
     tool_version: str = __version__
 
@@ -227,6 +231,11 @@ def _check_values(manifest: SessionManifest, where: str) -> None:
     for gap in manifest.event_gaps_us or ():
         if not (isinstance(gap, list) and len(gap) == 2 and all(_is_time(v) for v in gap)):
             raise SessionError(f"{where}: field 'event_gaps_us' holds {gap!r}, not [start, end]")
+    if manifest.lens is not None:
+        try:
+            Lens.from_json(manifest.lens, f"{where}: field 'lens'")
+        except UsageError as error:
+            raise SessionError(str(error)) from None
     if manifest.color_filter not in {pattern.value for pattern in ColorFilter}:
         names = ", ".join(pattern.value for pattern in ColorFilter)
         raise SessionError(
@@ -242,6 +251,7 @@ _JSON_TYPES: dict[str, tuple[type, ...]] = {
     "dict": (dict,),
     "list[str]": (list,),
     "list[list[int]] | None": (list, type(None)),
+    "dict | None": (dict, type(None)),
 }
 """The JSON types a field's annotation allows (``drops`` is checked on its own)."""
 _FIELD_TYPES = {

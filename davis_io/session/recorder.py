@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import errno
 import queue
 import shutil
@@ -15,6 +16,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from davis_io.errors import SessionError, describe_error
+from davis_io.lens import read_camera_calibration
 from davis_io.session.defaults import DEFAULT_BINS
 from davis_io.session.folder import check_limits, check_preview, new_session_folder
 from davis_io.session.layout import H5_NAME
@@ -86,6 +88,7 @@ def record(
     preview: Path | str | None = None,
     drop_when_full: bool | None = None,
     queue_packets: int = _QUEUE_PACKETS,
+    camera_calibration: Path | None = None,
 ) -> RecordingResult:
     """Record ``source`` into a new session folder.
 
@@ -107,6 +110,8 @@ def record(
             for a live camera (``source.info.origin == "usb"``), whose reader must never wait;
             replay and emulator sources wait, losing nothing.
         queue_packets: queue capacity in packets.
+        camera_calibration: the camera's lens calibration file, stored in ``session.json``
+            (read before anything is recorded: a file that cannot serve refuses the start).
 
     Returns:
         The result; its manifest says ``complete`` or ``interrupted`` (Ctrl-C).
@@ -124,6 +129,9 @@ def record(
         manifest = SessionManifest.from_source(
             source.info, b=bins, exposure_requested_us=exposure_us, start_time_utc=started
         )
+        if camera_calibration is not None:
+            lens = read_camera_calibration(camera_calibration, manifest.width, manifest.height)
+            manifest = dataclasses.replace(manifest, lens=lens.to_json())
         run = _Run(source, folder, manifest, queue_packets)
         write_manifest(folder, manifest)
         if drop_when_full is None:
