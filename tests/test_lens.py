@@ -212,3 +212,29 @@ def test_a_recording_keeps_the_lens_it_was_given_and_refuses_one_for_another_cam
     with pytest.raises(UsageError, match="for 346x260 images, the camera's are 64x48"):
         record(EmulatedCamera(**small), tmp_path / "t", camera_calibration=tmp_path / "davis.xml")
     assert not (tmp_path / "t").exists()  # refused before anything was recorded
+
+
+class _RayEcho(torch.nn.Module):
+    """A stand-in field whose log radiance is the ray's direction: renders show each ray."""
+
+    def __init__(self):
+        super().__init__()
+        self.unused = torch.nn.Parameter(torch.zeros(1))
+
+    def render_log_radiance(self, origins, directions):
+        return directions
+
+
+def test_renders_follow_the_lens_or_a_pinhole_on_request():
+    from seenerf.eval.views import render_log_image
+
+    lens = Lens(40, 30, 30.0, 30.0, 19.5, 14.5, (-0.2, 0.03, 0.001, 0.0))
+    size = (lens.height, lens.width)
+    seen = render_log_image(
+        _RayEcho(), np.eye(4), lens.intrinsics, size, distortion=lens.coefficients
+    )
+    assert np.abs(seen[..., :2] - lens.pixel_rays()).max() < 1e-5
+    straight = render_log_image(_RayEcho(), np.eye(4), lens.intrinsics, size)
+    columns = (np.arange(40) - 19.5) / 30.0
+    assert np.allclose(straight[0, :, 0], columns, atol=1e-6)
+    assert np.abs(seen[0, :, 0] - columns).max() > 0.05  # the corners differ by the lens

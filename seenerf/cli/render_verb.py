@@ -43,13 +43,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="also write the views as an MP4 video: at the one --exposure given, or "
         "tone-mapped HDR without one (--path orbit makes a turn around the scene)",
     )
+    parser.add_argument(
+        "--undistorted",
+        action="store_true",
+        help="render through a pinhole of the camera's intrinsics instead of its lens "
+        "(straight lines straight; the same without lens distortion)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     """Render; print where; return 0."""
     from seenerf.train import render_run
 
-    out = render_run(args.run_dir, tuple(args.exposure), args.path, args.out, args.video)
+    out = render_run(
+        args.run_dir, tuple(args.exposure), args.path, args.out, args.video, args.undistorted
+    )
     print(f"renders: {out}")
     if args.video is not None:
         print(f"video: {args.video}")

@@ -109,12 +109,14 @@ def render_run(
     path: str | None = None,
     out_name: str | None = None,
     video: Path | None = None,
+    undistorted: bool = False,
 ) -> Path:
     """Render a run along a camera path (``orbit``, a file, or the held-out views if None).
 
     The views go to ``run_dir/out_name`` (default ``held-out`` or ``path``), never into the
     fit's own ``renders/``; with ``video``, also an MP4 there: at the one exposure given, or
-    tone-mapped HDR.
+    tone-mapped HDR. They are seen through the camera's lens, or with ``undistorted`` through
+    a pinhole of its intrinsics (straight lines straight).
 
     Raises:
         davis_io.errors.UsageError: ``out_name`` is not a plain folder name.
@@ -134,6 +136,7 @@ def render_run(
         poses = orbit_poses(run.data) if path == "orbit" else read_path(Path(path))
     exposures = exposures_s or bracket_exposures(run.config, run.data)
     out_name = out_name or ("held-out" if path is None else "path")
+    distortion = None if undistorted else run.data.distortion
     views = render_views(
         run.model,
         poses,
@@ -141,7 +144,7 @@ def render_run(
         run.data.image_size,
         tuple(exposures),
         monochrome=run.data.monochrome,
-        distortion=run.data.distortion,
+        distortion=distortion,
     )
     out_dir = run.run_dir / out_name
     write_views(
@@ -150,7 +153,7 @@ def render_run(
         run.data.intrinsics,
         run.data.image_size,
         {"seecap_variant": run.config.variant, "seecap_path": str(path or "held-out views")},
-        distortion=run.data.distortion,
+        distortion=distortion,
     )
     if video is not None:
         write_video(video, video_frames(views, exposures_s[0] if exposures_s else None))
