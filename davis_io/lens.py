@@ -102,6 +102,15 @@ class Lens:
             ours, theirs, rtol=tolerance, atol=tolerance * 1e-3
         )
 
+    def corner_shift_px(self) -> float:
+        """How far the distortion moves the image's corners from where a pinhole puts them."""
+        corners = np.array(
+            [[0, 0], [self.width - 1, 0], [0, self.height - 1], [self.width - 1, self.height - 1]],
+            np.float64,
+        )
+        pinhole = self.normalised(corners) * self.intrinsics[:2] + self.intrinsics[2:]
+        return float(np.abs(pinhole - corners).max())
+
     @property
     def intrinsics(self) -> np.ndarray:
         """``(4,)`` fx, fy, cx, cy."""

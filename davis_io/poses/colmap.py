@@ -109,6 +109,7 @@ class SparseModel:
             0.1 to 10 times the larger image side, small distortion terms); a degenerate model
             of a few images can drift far outside them.
         folder: where COLMAP's files of the model are (None: not written).
+        image_size: ``(width, height)`` of the camera's images (0, 0: unknown).
     """
 
     c2w: dict[str, np.ndarray]
@@ -120,6 +121,12 @@ class SparseModel:
     reprojection_error_px: float = 0.0
     plausible_camera: bool = True
     folder: Path | None = None
+    image_size: tuple[int, int] = (0, 0)
+
+    @property
+    def lens(self) -> Lens:
+        """The camera's lens: its intrinsics and distortion."""
+        return Lens.pinhole(*self.image_size, self.intrinsics).with_distortion(self.distortion)
 
 
 def _quiet() -> None:
@@ -289,10 +296,13 @@ def with_radial_lens(model: SparseModel) -> SparseModel:
     """The model bundle-adjusted again with a radial lens, or ``model`` when that does not serve.
 
     Mapping starts from a pinhole: a radial term estimated with the focal length from the first
-    pair collapses on the short baselines of a hand-held sweep. From the finished model it is
-    well posed, and recovers a small lens's barrel distortion and the focal length it had
-    inflated. The radial model is kept (written over the model's folder) when its camera is
-    plausible and its reprojection error is no worse.
+    pair collapses on the short baselines of a hand-held sweep. From the finished model, a
+    radial lens lowers the error a pinhole leaves, but its focal length stays near the one the
+    pinhole inflated to take up the distortion (the error barely changes along focal length
+    and radial terms together); a second mapping from this lens finds both
+    (:func:`davis_io.poses.recovery.reconstruct_with_recovery`). The radial model is kept
+    (written over the model's folder) when its camera is plausible and its reprojection error
+    is no worse.
     """
     if model.folder is None or model.distortion.size:
         return model
@@ -314,6 +324,16 @@ def with_radial_lens(model: SparseModel) -> SparseModel:
         return model
     reconstruction.write(model.folder)
     return dataclasses.replace(sparse_model_from(reconstruction), folder=model.folder)
+
+
+def use_lens(database: Path, lens: Lens) -> None:
+    """Give the database's camera ``lens`` as its starting values for the next mapping."""
+    model, values = colmap_camera(lens)
+    with pycolmap.Database.open(database) as opened:
+        for camera in opened.read_all_cameras():
+            camera.model = getattr(pycolmap.CameraModelId, model)
+            camera.params = values
+            opened.update_camera(camera)
 
 
 def model_points(model_dir: Path) -> np.ndarray:
@@ -353,6 +373,7 @@ def sparse_model_from(reconstruction: pycolmap.Reconstruction) -> SparseModel:
         bounds=bounds,
         reprojection_error_px=float(reconstruction.compute_mean_reprojection_error()),
         plausible_camera=_plausible(reconstruction),
+        image_size=(int(camera.width), int(camera.height)),
     )
 
 

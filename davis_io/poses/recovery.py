@@ -38,6 +38,7 @@ from davis_io.poses.colmap import (
     extract_features,
     match_features,
     reconstruct,
+    use_lens,
     with_radial_lens,
 )
 
@@ -85,6 +86,10 @@ class Strategy:
     order: Order = Order.KEYFRAMES_FIRST
 
 
+REMAP_SHIFT_PX = 1.0
+"""An estimated lens that moves the image's corners by more than this many pixels from a
+pinhole's is mapped with again: the first mapping's focal length took up part of the distortion."""
+
 STRATEGIES: tuple[Strategy, ...] = (
     Strategy("exhaustive", Matcher.EXHAUSTIVE),
     Strategy("all-at-once", Matcher.EXHAUSTIVE, order=Order.ALL_AT_ONCE),
@@ -123,9 +128,14 @@ def _images_of(strategy: Strategy, names: Sequence[Sequence[str]], sharpness) ->
     return [name for view in names for name in view]
 
 
-def _map(strategy, images, work_dir, image_dir, names, sharpness, mapping) -> SparseModel:
-    """Every image at once, the keyframes (sharpest per view) alone, or keyframes then all."""
-    model_dir = work_dir / "sparse" / strategy.name
+def _map(
+    strategy, images, work_dir, image_dir, names, sharpness, mapping, folder: str = ""
+) -> SparseModel:
+    """Every image at once, the keyframes (sharpest per view) alone, or keyframes then all.
+
+    The model goes to ``work_dir/sparse/<folder or the strategy's name>``.
+    """
+    model_dir = work_dir / "sparse" / (folder or strategy.name)
     if strategy.order is not Order.KEYFRAMES_FIRST:  # its images are the ones to map
         settings = MapperSettings(strategy.relaxed_initialisation, tuple(images))
         return reconstruct(work_dir / DATABASE_NAME, image_dir, model_dir, settings, **mapping)
@@ -177,6 +187,31 @@ def reconstruct_with_recovery(
     database = extract_features(work_dir, image_dir, [n for view in names for n in view], lens=lens)
     best, tried, matched = None, [], None
     mapping = {"fixed_intrinsics": lens is not None, "on_image": on_image}
+
+    def kept(model: SparseModel, strategy: Strategy | None, images) -> SparseModel:
+        """The model with its lens: the stated one, or one estimated.
+
+        An estimated lens that bends the image's corners is mapped with again (its values
+        refined) by ``strategy``.
+        """
+        if lens is not None:
+            return model
+        stage("lens")
+        estimated = with_radial_lens(model)
+        if strategy is None or estimated.lens.corner_shift_px() <= REMAP_SHIFT_PX:
+            return estimated
+        stage(f"mapping ({strategy.name}, with the estimated lens)")
+        use_lens(database, estimated.lens)
+        refining = {**mapping, "fixed_intrinsics": False}
+        folder = f"{strategy.name}-lens"
+        try:
+            again = _map(strategy, images, work_dir, image_dir, names, sharpness, refining, folder)
+        except ColmapError:
+            return estimated
+        if again.plausible_camera and len(again.c2w) >= len(estimated.c2w):
+            return again
+        return estimated
+
     for strategy in STRATEGIES:
         tried.append(strategy.name)
         if strategy.matcher is not matched:
@@ -193,7 +228,7 @@ def reconstruct_with_recovery(
             continue
         fraction = len(model.c2w) / len(images)
         if fraction >= REGISTERED_FRACTION:
-            return Outcome(_lens_of(model, lens, stage), strategy.name, True, tuple(tried))
+            return Outcome(kept(model, strategy, images), strategy.name, True, tuple(tried))
         if best is None or fraction > best[2]:
             best = (model, strategy.name, fraction)
     if best is None or best[2] < MINIMUM_FRACTION or len(best[0].c2w) < 3:
@@ -203,12 +238,6 @@ def reconstruct_with_recovery(
             "move the camera around rather than only rotating it, or give the camera's "
             "calibration with --camera-calibration"
         )
-    return Outcome(_lens_of(best[0], lens, stage), best[1], False, tuple(tried))
-
-
-def _lens_of(model: SparseModel, lens: Lens | None, stage: Callable[[str], None]) -> SparseModel:
-    """The model as kept: its stated lens, or a radial lens estimated where it fits better."""
-    if lens is not None:
-        return model
-    stage("lens")
-    return with_radial_lens(model)
+    # Later strategies replaced the matches this model was made from: its lens is not mapped
+    # with again.
+    return Outcome(kept(best[0], None, ()), best[1], False, tuple(tried))

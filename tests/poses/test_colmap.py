@@ -136,3 +136,40 @@ def test_an_unknown_pinhole_is_estimated_as_one(tmp_path):
     assert np.all(np.abs(model.distortion) < 0.01)
     assert model.intrinsics[0] == pytest.approx(INTRINSICS[0], rel=5e-3)
     assert (model.folder / "cameras.bin").is_file()
+
+
+@pytest.mark.parametrize("second_registers", [8, 6])
+def test_an_estimated_lens_that_bends_the_corners_is_mapped_with_again(
+    tmp_path, monkeypatch, second_registers
+):
+    names = [[f"{view}_{latent}.png" for latent in range(2)] for view in range(4)]
+    every = [name for view in names for name in view]
+    calls = []
+
+    def model(count, distortion=(), folder=None):
+        return SparseModel(
+            c2w={name: np.eye(4) for name in every[:count]},
+            intrinsics=np.array([300.0, 300.0, 172.5, 129.5]),
+            distortion=np.asarray(distortion, float),
+            points=np.zeros((0, 3)),
+            folder=folder,
+            image_size=(346, 260),
+        )
+
+    def mapped(strategy, images, work_dir, image_dir, names, sharpness, mapping, folder=""):
+        calls.append((folder, mapping["fixed_intrinsics"]))
+        return model(8) if not folder else model(second_registers, (-0.2, 0.03), tmp_path)
+
+    monkeypatch.setattr(recovery, "extract_features", lambda *_args, **_kw: tmp_path / "db")
+    monkeypatch.setattr(recovery, "match_features", lambda *_args: None)
+    monkeypatch.setattr(recovery, "_map", mapped)
+    monkeypatch.setattr(recovery, "with_radial_lens", lambda m: model(8, (-0.15,)))
+    given = []
+    monkeypatch.setattr(recovery, "use_lens", lambda _database, lens: given.append(lens))
+    outcome = reconstruct_with_recovery(tmp_path, tmp_path, names, [[0.0, 1.0]] * 4)
+    # k1 -0.15 moves the corners of a 346 x 260 image at f 300 by about 12 px: mapped again,
+    # starting from the estimate, its values refined.
+    assert given[0].distortion == (-0.15,) and given[0].corner_shift_px() > 10
+    assert calls == [("", False), ("exhaustive-lens", False)]
+    kept = outcome.model.distortion.tolist()
+    assert kept == ([-0.2, 0.03] if second_registers == 8 else [-0.15])  # fewer registered: not
