@@ -32,8 +32,8 @@ from benchlib.blind import (
     rows_to_json,
     run_blind_session,
 )
-from benchlib.machine import describe_machine, exact_command, source_commit
-from benchlib.publish import BLIND_BEGIN, BLIND_END, RESULTS_FOLDER, splice
+from benchlib.machine import run_header
+from benchlib.publish import BLIND_BEGIN, BLIND_END, publish_section
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -75,12 +75,8 @@ def main(argv: list[str] | None = None) -> int:
         document = _run_sessions(args)
     print(blind_report(document))
     if args.publish:
-        results = ROOT / RESULTS_FOLDER
-        results.mkdir(exist_ok=True)
-        (results / "blind.json").write_text(json.dumps(document, indent=1, default=str))
-        report = ROOT / "BENCHMARKS.md"
-        report.write_text(
-            splice(report.read_text(), blind_report(document), BLIND_BEGIN, BLIND_END)
+        publish_section(
+            ROOT, "blind.json", document, blind_report(document), BLIND_BEGIN, BLIND_END
         )
     return 0
 
@@ -93,9 +89,7 @@ def _run_sessions(args: argparse.Namespace) -> dict:
         os.environ["OMP_NUM_THREADS"] = str(threads)  # the children's torch threads
     start, done = time.time(), {}
     header = {  # as at the start: edits made while it runs are not what it measured
-        "commit": source_commit(),
-        "command": exact_command(),
-        "machine": describe_machine().line(),
+        **run_header(),
         "budget_s": args.budget,
         "jobs": args.jobs,
         "threads_per_fit": threads,

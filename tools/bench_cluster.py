@@ -20,8 +20,8 @@ import time
 from pathlib import Path
 
 from benchlib.cluster import FIT_THREADS
-from benchlib.machine import describe_machine, exact_command, source_commit
-from benchlib.publish import CLUSTER_BEGIN, CLUSTER_END, RESULTS_FOLDER, splice
+from benchlib.machine import run_header
+from benchlib.publish import CLUSTER_BEGIN, CLUSTER_END, publish_section
 from benchlib.side_by_side import ROW_FIELDS, side_by_side_report
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -64,9 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
     document = {
-        "commit": source_commit(),
-        "command": exact_command(),
-        "machine": describe_machine().line(),
+        **run_header(),
         "ray_cpus_per_fit": FIT_THREADS,
         "runs": {},
     }
@@ -78,10 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     (out / "cluster.md").write_text(report + "\n")
     print(report)
     if args.publish:
-        (ROOT / RESULTS_FOLDER).mkdir(exist_ok=True)
-        (ROOT / RESULTS_FOLDER / "cluster.json").write_text(json.dumps(document, indent=1) + "\n")
-        benchmarks = ROOT / "BENCHMARKS.md"
-        benchmarks.write_text(splice(benchmarks.read_text(), report, CLUSTER_BEGIN, CLUSTER_END))
+        publish_section(ROOT, "cluster.json", document, report, CLUSTER_BEGIN, CLUSTER_END)
     failed = [way for way, run in document["runs"].items() if run["returncode"] != 0]
     return 1 if failed else 0
 

@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 from benchlib.lens import LENS_CASES, lens_report
-from benchlib.machine import describe_machine, exact_command, source_commit
-from benchlib.publish import LENS_BEGIN, LENS_END, RESULTS_FOLDER, splice
+from benchlib.machine import run_header
+from benchlib.publish import LENS_BEGIN, LENS_END, publish_section
 from benchlib.runner import python_command, run_measured
 
 from davis_io.emulator import EmulatedCamera
@@ -101,9 +101,7 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
     document = {
-        "commit": source_commit(),
-        "command": exact_command(),
-        "machine": describe_machine().line(),
+        **run_header(),
         "scene": SCENE,
         "seed": SEED,
         "frames": FRAMES,
@@ -129,10 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     (out / "lens.md").write_text(report + "\n")
     print(report)
     if args.publish:
-        (ROOT / RESULTS_FOLDER).mkdir(exist_ok=True)
-        (ROOT / RESULTS_FOLDER / "lens.json").write_text(json.dumps(document, indent=1) + "\n")
-        benchmarks = ROOT / "BENCHMARKS.md"
-        benchmarks.write_text(splice(benchmarks.read_text(), report, LENS_BEGIN, LENS_END))
+        publish_section(ROOT, "lens.json", document, report, LENS_BEGIN, LENS_END)
     return 1 if any("error" in case for case in document["cases"].values()) else 0
 
 

@@ -11,16 +11,8 @@ positions spread like the 16-view benchmark's 4 x 4 grid (the slow test runs tha
 
 
 def calibrated_lens(camera: EmulatedCamera) -> Lens:
-    """A calibration of the emulated camera: its focal length, principal point at the centre."""
-    config = camera.config
-    return Lens(
-        config.width,
-        config.height,
-        config.focal_px,
-        config.focal_px,
-        (config.width - 1) / 2,
-        (config.height - 1) / 2,
-    )
+    """A calibration of the emulated camera: its lens as a calibration file would state it."""
+    return camera.config.optics
 
 
 def record_emulated(folder, **settings):

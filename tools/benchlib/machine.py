@@ -11,7 +11,14 @@ from pathlib import Path
 
 from seenerf.provenance import source_commit
 
-__all__ = ["Machine", "cpu_model", "describe_machine", "exact_command", "source_commit"]
+__all__ = [
+    "Machine",
+    "cpu_model",
+    "describe_machine",
+    "exact_command",
+    "run_header",
+    "source_commit",
+]
 
 
 @dataclass(frozen=True)
@@ -79,3 +86,12 @@ def exact_command(argv: list[str] | None = None) -> str:
     argv = sys.argv if argv is None else argv
     shown = [os.path.relpath(a) if os.path.isabs(a) else a for a in argv]
     return shlex.join([Path(sys.executable).name, *shown])
+
+
+def run_header() -> dict:
+    """What a report states first: the commit measured, the command and the machine."""
+    return {
+        "commit": source_commit(),
+        "command": exact_command(),
+        "machine": describe_machine().line(),
+    }

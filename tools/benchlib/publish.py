@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import shutil
 from pathlib import Path
 
@@ -21,6 +22,7 @@ __all__ = [
     "RESULTS_FOLDER",
     "as_published",
     "publish",
+    "publish_section",
     "splice",
 ]
 
@@ -63,6 +65,18 @@ def splice(document: str, section: str, begin: str = BEGIN, end: str = END) -> s
         raise ValueError(f"BENCHMARKS.md has {end!r} before {begin!r}")
     tail = rest.split(end)[1]
     return f"{head}{begin}\n\n{section.strip()}\n\n{end}{tail}"
+
+
+def publish_section(
+    root: Path, name: str, document: dict, section: str, begin: str, end: str
+) -> None:
+    """Keep ``document`` as ``root/bench-results/name`` and splice ``section`` into
+    ``root/BENCHMARKS.md`` between ``begin`` and ``end``."""
+    results = root / RESULTS_FOLDER
+    results.mkdir(exist_ok=True)
+    (results / name).write_text(json.dumps(document, indent=1, default=str) + "\n")
+    benchmarks = root / "BENCHMARKS.md"
+    benchmarks.write_text(splice(benchmarks.read_text(), section, begin, end))
 
 
 def publish(report: BenchReport, out: Path, document: Path) -> Path:
