@@ -33,22 +33,18 @@ from benchlib.blind import (
     run_blind_session,
 )
 from benchlib.machine import run_header
-from benchlib.publish import BLIND_BEGIN, BLIND_END, publish_section
+from benchlib.publish import BLIND_BEGIN, BLIND_END, publish_section, report_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("bench-out/blind"))
+    parser = report_parser(__doc__.splitlines()[0], "bench-out/blind")
     parser.add_argument("--budget", type=float, default=600.0, help="full's budget, seconds")
     parser.add_argument(
         "--sessions", nargs="+", default=[s.key for s in BLIND_SESSIONS], help="session keys"
     )
     parser.add_argument("--fresh", action="store_true", help="record and fit everything again")
-    parser.add_argument(
-        "--publish", action="store_true", help="copy the results into the repository's report"
-    )
     parser.add_argument(
         "--render-only",
         action="store_true",

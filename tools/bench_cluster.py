@@ -12,7 +12,6 @@ cluster markers. About 15 minutes on 2 cores.
 
 from __future__ import annotations
 
-import argparse
 import json
 import subprocess
 import sys
@@ -21,7 +20,7 @@ from pathlib import Path
 
 from benchlib.cluster import FIT_THREADS
 from benchlib.machine import run_header
-from benchlib.publish import CLUSTER_BEGIN, CLUSTER_END, publish_section
+from benchlib.publish import CLUSTER_BEGIN, CLUSTER_END, publish_section, report_parser
 from benchlib.side_by_side import ROW_FIELDS, side_by_side_report
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -55,11 +54,7 @@ def _run(way: str, out: Path) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("bench-out/cluster"))
-    parser.add_argument(
-        "--publish", action="store_true", help="copy the results into the repository's report"
-    )
+    parser = report_parser(__doc__.splitlines()[0], "bench-out/cluster")
     args = parser.parse_args(argv)
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)

@@ -14,7 +14,6 @@ BENCHMARKS.md between its lens markers. About 30 minutes on 2 cores at a 10-minu
 
 from __future__ import annotations
 
-import argparse
 import json
 import shutil
 import sys
@@ -24,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from benchlib.lens import LENS_CASES, lens_report
 from benchlib.machine import run_header
-from benchlib.publish import LENS_BEGIN, LENS_END, publish_section
+from benchlib.publish import LENS_BEGIN, LENS_END, publish_section, report_parser
 from benchlib.runner import python_command, run_measured
 
 from davis_io.emulator import EmulatedCamera
@@ -91,12 +90,8 @@ def _fit(name: str, session: Path, calibration: Path | None, budget: str, out: P
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("bench-out/lens"))
+    parser = report_parser(__doc__.splitlines()[0], "bench-out/lens")
     parser.add_argument("--budget", default="10m", help="each fit's --time-budget")
-    parser.add_argument(
-        "--publish", action="store_true", help="copy the results into the repository's report"
-    )
     args = parser.parse_args(argv)
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
 import shutil
@@ -23,6 +24,7 @@ __all__ = [
     "as_published",
     "publish",
     "publish_section",
+    "report_parser",
     "splice",
 ]
 
@@ -99,3 +101,13 @@ def publish(report: BenchReport, out: Path, document: Path) -> Path:
 def as_published(report: BenchReport) -> BenchReport:
     """``report`` with its plot (and scene images) linked where :func:`publish` copies them."""
     return dataclasses.replace(report, plot_name=f"{RESULTS_FOLDER}/{report.plot_name}")
+
+
+def report_parser(description: str, out: str) -> argparse.ArgumentParser:
+    """A benchmark tool's parser with its ``--out`` folder (default ``out``) and ``--publish``."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--out", type=Path, default=Path(out))
+    parser.add_argument(
+        "--publish", action="store_true", help="copy the results into the repository's report"
+    )
+    return parser
