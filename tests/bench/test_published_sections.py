@@ -5,6 +5,7 @@ from pathlib import Path
 
 import pytest
 from benchlib.blind import blind_report
+from benchlib.lens import lens_report
 from benchlib.publish import (
     BEGIN,
     BLIND_BEGIN,
@@ -12,6 +13,8 @@ from benchlib.publish import (
     CLUSTER_BEGIN,
     CLUSTER_END,
     END,
+    LENS_BEGIN,
+    LENS_END,
     as_published,
 )
 from benchlib.readback import report_from_json
@@ -31,8 +34,9 @@ def _section(begin: str, end: str) -> str:
     [
         ("blind.json", blind_report, BLIND_BEGIN, BLIND_END),
         ("cluster.json", side_by_side_report, CLUSTER_BEGIN, CLUSTER_END),
+        ("lens.json", lens_report, LENS_BEGIN, LENS_END),
     ],
-    ids=["blind", "cluster"],
+    ids=["blind", "cluster", "lens"],
 )
 def test_a_generated_section_holds_what_its_results_file_renders_to(name, render, begin, end):
     document = json.loads((ROOT / "bench-results" / name).read_text())
