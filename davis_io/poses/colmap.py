@@ -318,7 +318,15 @@ def with_radial_lens(model: SparseModel) -> SparseModel:
     options.refine_extra_params = True
     options.refine_principal_point = False
     options.print_summary = False
-    pycolmap.bundle_adjustment(reconstruction, options)
+    options.ceres.solver_options.num_threads = 1  # in parallel it sums in another order each run
+    problem = pycolmap.BundleAdjustmentConfig()
+    for image_id, image in reconstruction.images.items():
+        if image.has_pose:
+            problem.add_image(image_id)
+    problem.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
+    # The adjuster itself, not pycolmap.bundle_adjustment: that one logs to the terminal.
+    pycolmap.create_default_bundle_adjuster(options, problem, reconstruction).solve()
+    reconstruction.update_point_3d_errors()
     error = reconstruction.compute_mean_reprojection_error()
     if not (_plausible(reconstruction) and error <= RADIAL_NO_WORSE * model.reprojection_error_px):
         return model
