@@ -7,7 +7,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from davis_io.calibration.session_calibration import session_calibration
-from davis_io.poses.estimate import estimate_poses, made_with, stated_lens
+from davis_io.lens import read_camera_calibration
+from davis_io.poses.estimate import estimate_poses, made_with
 from davis_io.session import Session
 
 __all__ = ["StageLines", "prepare_session"]
@@ -37,8 +38,10 @@ def prepare_session(
         SessionError, UsageError: the session cannot be read or written.
     """
     start = time.perf_counter()
-    lens = stated_lens(session_dir, camera_calibration) if camera_calibration else None
     with Session.open(session_dir) as session:
+        lens = None
+        if camera_calibration is not None:
+            lens = read_camera_calibration(camera_calibration, session.width, session.height)
         if session.calibration() is None:
             log("measuring the sensor from the recording")
             calibration = session_calibration(session, progress=log)

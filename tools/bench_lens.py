@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from benchlib.lens import LENS_CASES, lens_report
 from benchlib.machine import run_header
-from benchlib.publish import LENS_BEGIN, LENS_END, publish_section, report_parser
+from benchlib.publish import LENS_BEGIN, LENS_END, keep_report, report_parser
 from benchlib.runner import python_command, run_measured
 
 from davis_io.emulator import EmulatedCamera
@@ -117,12 +117,10 @@ def main(argv: list[str] | None = None) -> int:
             for name in LENS_CASES
         }
         document["cases"] = {name: future.result() for name, future in futures.items()}
-    (out / "lens.json").write_text(json.dumps(document, indent=1) + "\n")
-    report = lens_report(document)
-    (out / "lens.md").write_text(report + "\n")
-    print(report)
-    if args.publish:
-        publish_section(ROOT, "lens.json", document, report, LENS_BEGIN, LENS_END)
+    markers = (LENS_BEGIN, LENS_END)
+    keep_report(
+        out, "lens", document, lens_report(document), markers, ROOT if args.publish else None
+    )
     return 1 if any("error" in case for case in document["cases"].values()) else 0
 
 

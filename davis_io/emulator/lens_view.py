@@ -19,9 +19,6 @@ from davis_io.lens import Lens
 
 __all__ = ["LensView", "lens_distortion"]
 
-LENS_KINDS = ("pinhole", "random")
-"""Named lenses; any other value is a list of OpenCV coefficients."""
-
 _RANDOM_K1 = (-0.35, -0.08)
 """Range of ``k1`` drawn for a random lens: the barrel distortion of the small wide lenses
 DAVIS cameras carry."""

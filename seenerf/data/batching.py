@@ -10,7 +10,7 @@ import torch
 from seenerf.data.arrays import TrainingData
 from seenerf.data.subframes import refine_exposure
 from seenerf.model.imaging import RayBatch
-from seenerf.render.rays import camera_rays, normalised_coordinates, rays_through
+from seenerf.render.rays import camera_rays, pixel_coordinates, rays_through
 
 __all__ = ["FrameSampler", "SharpTruthSampler"]
 
@@ -54,19 +54,9 @@ class FrameSampler:
         self.weights = torch.as_tensor(weights, device=device)
         self.c2w = torch.as_tensor(c2w, device=device)
         self.intrinsics = torch.as_tensor(data.intrinsics, device=device)
-        rows, columns = torch.meshgrid(
-            torch.arange(self.height, device=device),
-            torch.arange(self.width, device=device),
-            indexing="ij",
-        )
+        lens = torch.as_tensor(data.distortion, device=device)
         self.pixel_xy = torch.stack(
-            normalised_coordinates(
-                self.intrinsics,
-                columns.reshape(-1).float(),
-                rows.reshape(-1).float(),
-                torch.as_tensor(data.distortion, device=device),
-            ),
-            dim=-1,
+            pixel_coordinates(self.intrinsics, data.image_size, lens), dim=-1
         )
         self.mix = torch.as_tensor(data.mix, device=device).reshape(-1, 3)
         self.channel = torch.as_tensor(data.channel, device=device).reshape(-1)

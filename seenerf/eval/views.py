@@ -17,7 +17,7 @@ from seenerf.eval.export import (
     write_png,
 )
 from seenerf.model.model import SeeNerfModel
-from seenerf.render.rays import normalised_coordinates, rays_through
+from seenerf.render.rays import pixel_coordinates, rays_through
 
 __all__ = [
     "PAPER_EXPOSURES_S",
@@ -75,11 +75,8 @@ def render_log_image(
     parameter = next(model.parameters())
     pose = torch.as_tensor(np.asarray(c2w), dtype=torch.float32, device=parameter.device)
     k = torch.as_tensor(np.asarray(intrinsics), dtype=torch.float32, device=parameter.device)
-    v, u = torch.meshgrid(
-        torch.arange(height, device=k.device), torch.arange(width, device=k.device), indexing="ij"
-    )
     lens = None if distortion is None else torch.as_tensor(distortion, device=k.device)
-    x, y = normalised_coordinates(k, u.reshape(-1).float(), v.reshape(-1).float(), lens)
+    x, y = pixel_coordinates(k, image_size, lens)
     out = []
     for start in range(0, x.numel(), chunk):
         origins, directions = rays_through(pose, x[start : start + chunk], y[start : start + chunk])

@@ -141,6 +141,20 @@ def normalised_coordinates(
     return x, y
 
 
+def pixel_coordinates(
+    intrinsics: torch.Tensor, image_size: tuple[int, int], distortion: torch.Tensor | None = None
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """``x / z`` and ``y / z`` of every pixel's ray, ``(H * W,)`` each, row by row."""
+    height, width = image_size
+    rows, columns = torch.meshgrid(
+        torch.arange(height, device=intrinsics.device),
+        torch.arange(width, device=intrinsics.device),
+        indexing="ij",
+    )
+    u, v = columns.reshape(-1).float(), rows.reshape(-1).float()
+    return normalised_coordinates(intrinsics, u, v, distortion)
+
+
 def rays_through(
     c2w: torch.Tensor, x: torch.Tensor, y: torch.Tensor
 ) -> tuple[torch.Tensor, torch.Tensor]:

@@ -24,6 +24,7 @@ __all__ = [
     "as_published",
     "publish",
     "publish_section",
+    "keep_report",
     "report_parser",
     "splice",
 ]
@@ -79,6 +80,18 @@ def publish_section(
     (results / name).write_text(json.dumps(document, indent=1, default=str) + "\n")
     benchmarks = root / "BENCHMARKS.md"
     benchmarks.write_text(splice(benchmarks.read_text(), section, begin, end))
+
+
+def keep_report(
+    out: Path, name: str, document: dict, section: str, markers: tuple[str, str], root: Path | None
+) -> None:
+    """Write ``out/NAME.json`` and ``out/NAME.md``, print the section, and publish both into
+    ``root`` (None: not published) between the section's ``markers``."""
+    (out / f"{name}.json").write_text(json.dumps(document, indent=1) + "\n")
+    (out / f"{name}.md").write_text(section + "\n")
+    print(section)
+    if root is not None:
+        publish_section(root, f"{name}.json", document, section, *markers)
 
 
 def publish(report: BenchReport, out: Path, document: Path) -> Path:
