@@ -32,7 +32,14 @@ from scipy.optimize import minimize
 from davis_io.calibration.pixel_events import PixelEvents, log_blur
 from davis_io.calibration.response_fit import InverseResponse, hat_basis
 
-__all__ = ["THRESHOLD_RANGE", "ConsistencyProblem", "fit_pixel_factors", "fit_thresholds"]
+__all__ = [
+    "THRESHOLD_RANGE",
+    "ConsistencyProblem",
+    "fit_pixel_factors",
+    "fit_thresholds",
+    "normalise_factors",
+    "refine_pixel_factors",
+]
 
 KNOTS = 16
 """Knots of the free inverse response."""
@@ -186,15 +193,28 @@ def fit_pixel_factors(
     response: Callable[[np.ndarray], np.ndarray],
     steps: int = 4,
 ) -> np.ndarray:
-    """Fit each pixel's ON and OFF factors in place (Gauss-Newton, shrunk towards 1).
+    """Fit each pixel's ON and OFF factors in place, then divide them by their medians.
 
-    Each pixel's pairs give its own least-squares problem in two unknowns. The factors of the
-    pixels with at least three usable pairs are then divided by their median, the others set to
-    1, so the thresholds times that median stay the median pixel's.
+    Each pixel's pairs give its own least-squares problem in two unknowns
+    (:func:`refine_pixel_factors`); :func:`normalise_factors` then keeps the thresholds the
+    median pixel's.
 
     Returns:
         The thresholds ``(2,)`` multiplied by the factors' medians.
     """
+    refine_pixel_factors(problem, theta, response, steps)
+    return normalise_factors(
+        problem.factor_on, problem.factor_off, problem.usable.sum(axis=0), theta
+    )
+
+
+def refine_pixel_factors(
+    problem: ConsistencyProblem,
+    theta: np.ndarray,
+    response: Callable[[np.ndarray], np.ndarray],
+    steps: int = 4,
+) -> None:
+    """Gauss-Newton steps on each pixel's ON and OFF factors, shrunk towards 1, in place."""
     events, weight = problem.events, problem.usable.astype(np.float64)
     frame_change = np.diff(response(problem.values).reshape(problem.values.shape), axis=0)
     low, high = _FACTOR_RANGE
@@ -217,12 +237,23 @@ def fit_pixel_factors(
         problem.factor_off = np.clip(
             problem.factor_off + (a11 * b2 - a12 * b1) / determinant, low, high
         )
-    measured = weight.sum(axis=0) >= 3
+
+
+def normalise_factors(
+    factor_on: np.ndarray, factor_off: np.ndarray, pairs: np.ndarray, theta: np.ndarray
+) -> np.ndarray:
+    """Divide the factors of pixels with at least three usable ``pairs`` by their medians, in
+    place, and set the others' to 1.
+
+    Returns:
+        The thresholds ``(2,)`` multiplied by the medians (unchanged when no pixel has three).
+    """
+    measured = pairs >= 3
     if not measured.any():
-        problem.factor_on[:] = problem.factor_off[:] = 1.0
+        factor_on[:] = factor_off[:] = 1.0
         return np.asarray(theta, np.float64)
     means = []
-    for factors in (problem.factor_on, problem.factor_off):
+    for factors in (factor_on, factor_off):
         mean = float(np.median(factors[measured]))
         factors /= mean
         factors[~measured] = 1.0

