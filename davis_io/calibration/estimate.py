@@ -7,6 +7,7 @@ shell (:func:`calibrate_session`) reads them, runs it and stores the result.
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -66,6 +67,9 @@ uncertainty, so 4,000 pixels measure them as well in half the time."""
 
 SUBSET_PIXELS = 8_000
 """Pixels the global fits use at most (a recording of few or short pairs)."""
+
+FACTOR_WORKERS = 2
+"""Blocks of pixels fitted at once."""
 
 BLOCK_PIXELS = 4096
 """Pixels whose factors are fitted together. A whole DAVIS346 at once (17 M events) took 26 s
@@ -239,17 +243,21 @@ def _sensor_factors(
     """Every sensor pixel's ON and OFF factors at the subset's thresholds, latency and response.
 
     Each pixel's factors depend on its own pairs alone, so the search runs on the subset and
-    every pixel is fitted once, at its end, a block of pixels at a time.
+    every pixel is fitted once, at its end, a block of pixels at a time (two blocks at once:
+    numpy lets go of the interpreter inside its loops).
     """
     _, response = problem.solve(*theta)
-    factor_on, factor_off, pairs = [], [], []
-    for pixels, events in _pixel_blocks(recording):
-        block = _Problems(recording, pixels, subset.levels, subset.knots, subset.pair_mask, events)
-        found = block.at(problem.latency_us)
+
+    def fitted(block: tuple[np.ndarray, tuple]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        pixels, events = block
+        found = _Problems(
+            recording, pixels, subset.levels, subset.knots, subset.pair_mask, events
+        ).at(problem.latency_us)
         refine_pixel_factors(found, theta, response)
-        factor_on.append(found.factor_on)
-        factor_off.append(found.factor_off)
-        pairs.append(found.usable.sum(axis=0))
+        return found.factor_on, found.factor_off, found.usable.sum(axis=0)
+
+    with ThreadPoolExecutor(FACTOR_WORKERS) as pool:
+        factor_on, factor_off, pairs = zip(*pool.map(fitted, _pixel_blocks(recording)))
     factors = np.concatenate(factor_on), np.concatenate(factor_off)
     normalise_factors(*factors, np.concatenate(pairs), theta)
     return factors
@@ -262,15 +270,14 @@ def _pixel_blocks(recording: CalibrationInput):
         The block's pixels and their ``(times, index among them, is_on)``.
     """
     height, width = recording.shape
-    pixel = recording.y.astype(np.int64) * width + recording.x
-    block = pixel // BLOCK_PIXELS
-    order = np.argsort(block.astype(np.uint16), kind="stable")  # a radix sort, in time order
-    ends = np.searchsorted(block[order], np.arange(1, -(-height * width // BLOCK_PIXELS) + 1))
-    begin = 0
-    for number, end in enumerate(ends):
+    pixel = recording.y.astype(np.int32) * width + recording.x
+    block = (pixel // BLOCK_PIXELS).astype(np.uint16)
+    order = np.argsort(block, kind="stable")  # a radix sort; each block's events in time order
+    counts = np.bincount(block, minlength=-(-height * width // BLOCK_PIXELS))
+    ends = np.cumsum(counts)
+    for number, (begin, end) in enumerate(zip(ends - counts, ends, strict=True)):
         first = number * BLOCK_PIXELS
         chosen = order[begin:end]
-        begin = end
         pixels = np.arange(first, min(first + BLOCK_PIXELS, height * width))
         yield pixels, (recording.times_us[chosen], pixel[chosen] - first, recording.is_on[chosen])
 

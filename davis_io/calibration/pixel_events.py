@@ -111,7 +111,9 @@ def event_path(
         is_on: ``(N,)`` bool polarity.
         pixel_count: P.
     """
-    order = np.argsort(np.asarray(pixel_index, np.int64), kind="stable")  # then by time
+    # Then by time; a radix sort where the indices fit 16 bits (a block of pixels, a subset).
+    keys = np.asarray(pixel_index, np.uint16 if pixel_count <= 1 << 16 else np.int64)
+    order = np.argsort(keys, kind="stable")
     time = np.asarray(times_us, np.int64)[order].astype(np.float64)
     pixel = np.asarray(pixel_index, np.int64)[order]
     on = np.asarray(is_on, bool)[order]
