@@ -1,0 +1,80 @@
+"""What the calibration does to save time gives what the long way gives."""
+
+import numpy as np
+import pytest
+from synthetic_recording import KnownSensor, synthetic_recording
+
+from davis_io.calibration import dead_time as dead_time_module
+from davis_io.calibration import estimate
+from davis_io.calibration.consistency import KNOTS, fit_pixel_factors
+from davis_io.calibration.response_fit import frame_levels, place_knots
+from davis_io.emulator import Response
+
+
+@pytest.fixture(scope="module")
+def recording():
+    found, _, _ = synthetic_recording(
+        KnownSensor(0.25, 0.35, 0.04, Response("reinhard_gamma", gain=1.3, gamma=2.4))
+    )
+    return found
+
+
+def _problems(recording, pixels):
+    levels = frame_levels(recording.frames, recording.adc_step)
+    knots = place_knots(recording.frames, levels, KNOTS, recording.adc_step)
+    pairs = recording.pairs(0)
+    return estimate._Problems(recording, pixels, levels, knots, pairs)
+
+
+def test_every_pixels_factors_fitted_block_by_block_equal_one_fit_of_all(recording, monkeypatch):
+    # 64 x 48 = 3,072 pixels in blocks of 1,000: three whole blocks and one of 72.
+    monkeypatch.setattr(estimate, "BLOCK_PIXELS", 1000)
+    height, width = recording.shape
+    subset = _problems(recording, np.arange(0, height * width, 5))
+    problem = subset.at(2000)
+    theta = np.array([0.26, 0.33])
+    on, off = estimate._sensor_factors(recording, subset, problem, theta)
+    every = _problems(recording, np.arange(height * width)).at(2000)
+    fit_pixel_factors(every, theta, problem.solve(*theta)[1])
+    np.testing.assert_allclose(on, every.factor_on, rtol=1e-9)
+    np.testing.assert_allclose(off, every.factor_off, rtol=1e-9)
+    assert np.std(on) > 0.02 and np.std(off) > 0.02  # the pixels' own thresholds were learned
+
+
+def test_a_half_of_the_pixels_is_the_problem_of_those_pixels_alone(recording):
+    subset = _problems(recording, np.arange(0, 3072, 3))
+    for parity in (0, 1):
+        half = subset.half(parity).at(1000).events
+        alone = _problems(recording, subset.pixels[parity::2]).at(1000).events
+        for name in ("between_on", "between_off", "flat_share", "piece_key", "piece_share"):
+            np.testing.assert_array_equal(getattr(half, name), getattr(alone, name))
+        assert half.pixels == len(subset.pixels[parity::2])
+
+
+def test_the_pixels_are_drawn_until_they_hold_the_pairs_asked_for(recording, monkeypatch):
+    monkeypatch.setattr(estimate, "SUBSET_PAIRS", 100)
+    levels = frame_levels(recording.frames, recording.adc_step)
+    pairs = recording.pairs(0)
+    pixels = estimate._choose_pixels(recording, levels, pairs, seed=0)
+    values = recording.frames.reshape(len(recording.frames), -1)
+    inside = (values > levels.low) & (values < levels.high)
+    usable = (inside[:-1] & inside[1:]).sum(axis=0)
+    assert usable[pixels].min() >= 2
+    # Enough pairs, and one pixel fewer would not be (every pixel here holds at most 7).
+    assert usable[pixels].sum() >= 100 > usable[pixels].sum() - usable[pixels].min()
+    assert 100 / 7 <= len(pixels) <= 50
+
+
+def test_the_dead_time_of_every_nth_pixel_is_the_dead_time_of_all(monkeypatch):
+    # 400 pixels, each rate-limited to one event per 1,500 µs while a bright edge passes
+    # (40 events in a row), then quiet; read from 4,000 events, every 4th pixel.
+    rng = np.random.default_rng(2)
+    starts = rng.integers(0, 1_000_000, 400)
+    times = (starts[:, None] + 1500 * np.arange(40)[None, :]).ravel()
+    pixel = np.repeat(np.arange(400), 40)
+    order = np.argsort(times, kind="stable")
+    times, pixel = times[order], pixel[order]
+    x, y = (pixel % 20).astype(np.uint16), (pixel // 20).astype(np.uint16)
+    whole = dead_time_module.dead_time_us(times, x, y, 20)
+    monkeypatch.setattr(dead_time_module, "SAMPLE_EVENTS", 4_000)
+    assert dead_time_module.dead_time_us(times, x, y, 20) == whole == 1500
