@@ -14,7 +14,8 @@ thresholds (a spread of several per cent multiplies every count of the ~tens of 
 two frames), so each pixel gets ON and OFF factors of its own; the global thresholds are the
 median pixel's. The fit alternates:
 
-1. thresholds by Nelder-Mead on the disagreement in events (``g`` solved linearly inside);
+1. thresholds by Levenberg-Marquardt on the disagreement in events (``g`` solved linearly
+   inside);
 2. each pixel's factors by a few Gauss-Newton steps, shrunk towards 1;
 
 and profiles the latency (events moved earlier) on a grid.
@@ -27,7 +28,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.optimize import minimize
 
 from davis_io.calibration.pixel_events import PixelEvents, log_blur
 from davis_io.calibration.response_fit import InverseResponse, hat_basis
@@ -47,13 +47,22 @@ KNOTS = 16
 _SMOOTHNESS = 1e-3
 """Weight of the curve's second differences against the data (per pair)."""
 
+_DAMPING = 1e-3
+"""Levenberg-Marquardt's least damping of the thresholds' steps (relative to the curvature)."""
+
+_MAX_DAMPING = 1e6
+"""Damping at which the threshold fit gives up looking for a step that lowers the disagreement."""
+
+_MAX_STEPS = 30
+"""Steps of the threshold fit at most."""
+
 _FACTOR_PRIOR = 4.0
 """Shrinkage of a pixel's factors towards 1, in squared events (about 4 pairs' worth)."""
 
 THRESHOLD_RANGE = (0.01, 2.0)
 """Contrast thresholds (ln) the fit may try: outside, the disagreement is infinite. A DVS
 threshold is a few tenths; without a ceiling a recording whose frames are too sharp to pin the
-scale let Nelder-Mead climb to 300 (a 1/16 exposure of the emulated room), where the blur
+scale let the search climb to 300 (a 1/16 exposure of the emulated room), where the blur
 term's exponentials overflowed and every value after was NaN."""
 
 _FACTOR_RANGE = (0.05, 3.0)
@@ -130,6 +139,29 @@ class ConsistencyProblem:
         frame_change = self._design @ response.log_exposure[1:]
         return frame_change - change, response
 
+    def linearised(self, theta_on: float, theta_off: float) -> tuple[np.ndarray, np.ndarray]:
+        """The residuals of :meth:`solve` and their derivatives ``(Q, 2)`` by the thresholds.
+
+        The free response is the linear least-squares answer to the events' change, so the
+        residual is the change projected off the response's design, and so is its derivative.
+        """
+        on, off = theta_on * self.factor_on, theta_off * self.factor_off
+        blur = log_blur(self.events, on, off, derivatives=True)
+        events, frame, pixel = self.events, self._frame, self._pixel
+        change = on[pixel] * events.between_on[frame, pixel]
+        change -= off[pixel] * events.between_off[frame, pixel]
+        change += blur.value[frame + 1, pixel] - blur.value[frame, pixel]
+        by_on = events.between_on[frame, pixel] + blur.d_on[frame + 1, pixel]
+        by_off = -events.between_off[frame, pixel] + blur.d_off[frame + 1, pixel]
+        by_on -= blur.d_on[frame, pixel]
+        by_off -= blur.d_off[frame, pixel]
+        jacobian = np.stack([self.factor_on[pixel] * by_on, self.factor_off[pixel] * by_off], 1)
+        if self.linear_black is not None:
+            return self._design @ self._linear_log_exposure()[1:] - change, -jacobian
+        both = np.column_stack([change, jacobian])
+        both -= self._design @ np.linalg.solve(self._normal, self._design.T @ both)
+        return -both[:, 0], -both[:, 1:]
+
     def _linear_log_exposure(self) -> np.ndarray:
         """``ln(v - black)`` at the knots, 0 at the first."""
         log_g = np.log(np.maximum(self.knots - self.linear_black, 1e-9))
@@ -155,25 +187,34 @@ def fit_thresholds(
 ) -> tuple[np.ndarray, float, np.ndarray]:
     """ON and OFF thresholds that minimise the disagreement, from ``start``, to ``tolerance``.
 
+    Levenberg-Marquardt on the residuals in events (:meth:`ConsistencyProblem.linearised`);
+    a step is taken only where it lowers the disagreement. Nelder-Mead needed about 45
+    evaluations per fit, this about 4 steps.
+
     Returns:
         The thresholds ``(2,)``, the disagreement there (events squared) and the standard
         uncertainties ``(2,)`` from the curvature of the disagreement (a lower bound: it
         counts the pairs as independent).
     """
-    found = minimize(
-        lambda theta: problem.disagreement(*theta),
-        np.asarray(start, np.float64),
-        method="Nelder-Mead",
-        options={
-            "xatol": tolerance,
-            "fatol": 1e-5 * max(problem.disagreement(*start), 1e-9),
-            "maxiter": 120,
-            "initial_simplex": np.array(
-                [start, [start[0] * 1.08, start[1]], [start[0], start[1] * 1.08]], np.float64
-            ),
-        },
-    )
-    theta, best = found.x, float(found.fun)
+    theta = np.asarray(start, np.float64).copy()
+    best = problem.disagreement(*theta)
+    damping = _DAMPING
+    for _step in range(_MAX_STEPS):
+        system = _normal_equations(problem, theta)
+        if system is None:
+            break
+        while damping < _MAX_DAMPING:
+            step = _damped_step(*system, damping)
+            value = problem.disagreement(*(theta + step))
+            if value < best:
+                break
+            damping *= 10
+        else:
+            break
+        theta, best = theta + step, value
+        damping = max(damping / 10, _DAMPING)
+        if np.max(np.abs(step)) < tolerance / 4:
+            break
     step = 0.02 * theta
     curvature = np.empty(2)
     for axis in range(2):
@@ -185,6 +226,28 @@ def fit_thresholds(
     # Mean of Q squared residuals of variance `best`: its curvature c gives var = 2 best / (Q c).
     sd = np.sqrt(2 * best / (max(problem.pairs, 1) * curvature))
     return theta, best, sd
+
+
+def _normal_equations(
+    problem: ConsistencyProblem, theta: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Gauss-Newton's normal matrix and gradient of the residuals over the mean threshold
+    (None where they are not finite: a blur term that overflows)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        residual, jacobian = problem.linearised(*theta)
+        mean = 0.5 * theta.sum()
+        # d(r / mean) / d theta, the mean rising by half of each threshold.
+        scaled = residual / mean
+        jacobian = jacobian / mean - 0.5 * scaled[:, None] / mean
+        normal, gradient = jacobian.T @ jacobian, jacobian.T @ scaled
+    if not (np.all(np.isfinite(normal)) and np.all(np.isfinite(gradient))):
+        return None
+    return normal, gradient
+
+
+def _damped_step(normal: np.ndarray, gradient: np.ndarray, damping: float) -> np.ndarray:
+    """Levenberg-Marquardt's step: the curvature's diagonal raised by ``damping`` of itself."""
+    return -np.linalg.lstsq(normal + damping * np.diag(np.diag(normal)), gradient, rcond=None)[0]
 
 
 def fit_pixel_factors(
