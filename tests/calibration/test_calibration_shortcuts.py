@@ -78,3 +78,34 @@ def test_the_dead_time_of_every_nth_pixel_is_the_dead_time_of_all(monkeypatch):
     whole = dead_time_module.dead_time_us(times, x, y, 20)
     monkeypatch.setattr(dead_time_module, "SAMPLE_EVENTS", 4_000)
     assert dead_time_module.dead_time_us(times, x, y, 20) == whole == 1500
+
+
+@pytest.mark.parametrize("linear_black", [None, 0.02])
+def test_the_residuals_derivatives_by_the_thresholds_match_finite_differences(
+    recording, linear_black
+):
+    # The free response is solved inside the residuals: their derivatives are the projected
+    # derivatives of the events' change (exactly, the projection not depending on them).
+    problem = _problems(recording, np.arange(0, 3072, 4)).at(1000)
+    problem.factor_on = np.linspace(0.8, 1.2, len(problem.factor_on))
+    problem.linear_black = linear_black
+    theta, step = np.array([0.27, 0.31]), 1e-6
+    residual, jacobian = problem.linearised(*theta)
+    # The same residuals as solve's, which reads the blur term in single precision.
+    np.testing.assert_allclose(residual, problem.solve(*theta)[0], atol=2e-6)
+    for axis in range(2):
+        shift = np.zeros(2)
+        shift[axis] = step
+        up, _ = problem.linearised(*(theta + shift))
+        down, _ = problem.linearised(*(theta - shift))
+        np.testing.assert_allclose(jacobian[:, axis], (up - down) / (2 * step), atol=1e-6)
+    assert np.abs(jacobian).max() > 1.0
+
+
+def test_the_threshold_fit_ends_where_the_disagreement_is_least(recording):
+    problem = _problems(recording, np.arange(0, 3072, 2)).at(0)
+    theta, best, sd = estimate.fit_thresholds(problem, (0.3, 0.3))
+    for shift in ([0.004, 0], [-0.004, 0], [0, 0.004], [0, -0.004]):
+        assert problem.disagreement(*(theta + shift)) > best
+    assert best == pytest.approx(problem.disagreement(*theta))
+    assert np.all(sd > 0) and np.all(sd < 0.05)
