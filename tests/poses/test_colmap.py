@@ -10,7 +10,7 @@ from pose_scenes import HEIGHT, INTRINSICS, WIDTH, orbit_poses, render_box, text
 from davis_io.geometry import align_poses, rotation_error_deg
 from davis_io.lens import Lens
 from davis_io.poses import recovery
-from davis_io.poses.colmap import ColmapError, SparseModel, sparse_model_from
+from davis_io.poses.colmap import ColmapError, SparseModel, extract_features, sparse_model_from
 from davis_io.poses.recovery import reconstruct_with_recovery
 
 
@@ -49,6 +49,25 @@ def test_box_views_reconstruct_at_their_known_poses(tmp_path):
     # Every point lies inside the 4 m box, seen from under 1 m off centre: depth below 5 m.
     scale = align_poses(estimated, poses).scale
     assert 0 < outcome.model.bounds[0] < outcome.model.bounds[1] < 5.0 / scale
+
+
+def test_features_extracted_on_two_threads_are_those_of_one_with_ids_in_names_order(
+    tmp_path, monkeypatch
+):
+    names = [name for (name,) in write_views(tmp_path / "images", orbit_poses(6))][::-1]
+    found = {}
+    for threads in (1, 2):
+        monkeypatch.setattr("os.sched_getaffinity", lambda _pid, n=threads: set(range(n)))
+        database = extract_features(tmp_path / f"t{threads}", tmp_path / "images", names)
+        with pycolmap.Database.open(database) as opened:
+            images = sorted(opened.read_all_images(), key=lambda image: image.image_id)
+            found[threads] = [
+                (image.name, opened.read_keypoints(image.image_id).tobytes()) for image in images
+            ]
+    # Ids in the names' order (whatever the order given, here backwards), not in the order the
+    # threads finish in; the same features.
+    assert [name for name, _ in found[2]] == sorted(names)
+    assert found[1] == found[2]
 
 
 def test_textureless_views_give_a_colmap_error_with_advice(tmp_path):
