@@ -121,11 +121,15 @@ class ConsistencyProblem:
         """The change the events give for each usable pair, and the blur term ``ln M`` (F, P)."""
         on, off = theta_on * self.factor_on, theta_off * self.factor_off
         blur = log_blur(self.events, on, off).value
+        return self._change(on, off, blur), blur
+
+    def _change(self, on: np.ndarray, off: np.ndarray, blur: np.ndarray) -> np.ndarray:
+        """Each usable pair's change from the pixels' thresholds and the blur term ``(F, P)``."""
         frame, pixel = self._frame, self._pixel
         change = on[pixel] * self.events.between_on[frame, pixel]
         change -= off[pixel] * self.events.between_off[frame, pixel]
         change += blur[frame + 1, pixel] - blur[frame, pixel]
-        return change, blur
+        return change
 
     def solve(self, theta_on: float, theta_off: float) -> tuple[np.ndarray, InverseResponse]:
         """Residuals (ln units) of each usable pair and the inverse response that fits best."""
@@ -147,10 +151,8 @@ class ConsistencyProblem:
         """
         on, off = theta_on * self.factor_on, theta_off * self.factor_off
         blur = log_blur(self.events, on, off, derivatives=True)
+        change = self._change(on, off, blur.value)
         events, frame, pixel = self.events, self._frame, self._pixel
-        change = on[pixel] * events.between_on[frame, pixel]
-        change -= off[pixel] * events.between_off[frame, pixel]
-        change += blur.value[frame + 1, pixel] - blur.value[frame, pixel]
         by_on = events.between_on[frame, pixel] + blur.d_on[frame + 1, pixel]
         by_off = -events.between_off[frame, pixel] + blur.d_off[frame + 1, pixel]
         by_on -= blur.d_on[frame, pixel]
@@ -231,8 +233,10 @@ def fit_thresholds(
 def _normal_equations(
     problem: ConsistencyProblem, theta: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
-    """Gauss-Newton's normal matrix and gradient of the residuals over the mean threshold
-    (None where they are not finite: a blur term that overflows)."""
+    """Gauss-Newton's normal matrix and gradient of the residuals over the mean threshold.
+
+    None where they are not finite (a blur term that overflows).
+    """
     with np.errstate(over="ignore", invalid="ignore"):
         residual, jacobian = problem.linearised(*theta)
         mean = 0.5 * theta.sum()
@@ -305,8 +309,9 @@ def refine_pixel_factors(
 def normalise_factors(
     factor_on: np.ndarray, factor_off: np.ndarray, pairs: np.ndarray, theta: np.ndarray
 ) -> np.ndarray:
-    """Divide the factors of pixels with at least three usable ``pairs`` by their medians, in
-    place, and set the others' to 1.
+    """Divide the factors of pixels with three usable ``pairs`` or more by their medians.
+
+    In place; the other pixels' factors are set to 1.
 
     Returns:
         The thresholds ``(2,)`` multiplied by the medians (unchanged when no pixel has three).

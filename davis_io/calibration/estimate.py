@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -121,6 +122,11 @@ class CalibrationInput:
         """Sensor ``(height, width)``."""
         return self.frames.shape[1], self.frames.shape[2]
 
+    @cached_property
+    def pixel(self) -> np.ndarray:
+        """``(N,)`` int32 each event's pixel, ``y * width + x``."""
+        return self.y.astype(np.int32) * self.shape[1] + self.x
+
 
 class _Problems:
     """Builds consistency problems over a set of pixels at any latency (the paths built once)."""
@@ -134,8 +140,10 @@ class _Problems:
         pairs: np.ndarray,
         events: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
     ):
-        """``events``: the pixels' own ``(times, index among pixels, is_on)`` when already
-        chosen; else they are picked from the recording."""
+        """Paths of ``pixels``' events, those given or picked from the recording.
+
+        ``events``: the pixels' own ``(times, index among pixels, is_on)`` when already chosen.
+        """
         self._events = _events_of(recording, pixels) if events is None else events
         self._path = event_path(*self._events, len(pixels))
         self._recording, self.levels = recording, levels
@@ -184,7 +192,7 @@ def _events_of(
     height, width = recording.shape
     lookup = np.full(height * width, -1, np.int64)
     lookup[pixels] = np.arange(len(pixels))
-    index = lookup[recording.y.astype(np.int64) * width + recording.x]
+    index = lookup[recording.pixel]
     chosen = index >= 0
     return recording.times_us[chosen], index[chosen], recording.is_on[chosen]
 
@@ -257,7 +265,7 @@ def _sensor_factors(
         return found.factor_on, found.factor_off, found.usable.sum(axis=0)
 
     with ThreadPoolExecutor(FACTOR_WORKERS) as pool:
-        factor_on, factor_off, pairs = zip(*pool.map(fitted, _pixel_blocks(recording)))
+        factor_on, factor_off, pairs = zip(*pool.map(fitted, _pixel_blocks(recording)), strict=True)
     factors = np.concatenate(factor_on), np.concatenate(factor_off)
     normalise_factors(*factors, np.concatenate(pairs), theta)
     return factors
@@ -270,7 +278,7 @@ def _pixel_blocks(recording: CalibrationInput):
         The block's pixels and their ``(times, index among them, is_on)``.
     """
     height, width = recording.shape
-    pixel = recording.y.astype(np.int32) * width + recording.x
+    pixel = recording.pixel
     block = (pixel // BLOCK_PIXELS).astype(np.uint16)
     order = np.argsort(block, kind="stable")  # a radix sort; each block's events in time order
     counts = np.bincount(block, minlength=-(-height * width // BLOCK_PIXELS))
@@ -285,8 +293,10 @@ def _pixel_blocks(recording: CalibrationInput):
 def _choose_pixels(
     recording: CalibrationInput, levels: FrameLevels, pairs: np.ndarray, seed: int
 ) -> np.ndarray:
-    """Pixels with at least two usable pairs, drawn until they hold :data:`SUBSET_PAIRS`
-    pairs, at most :data:`SUBSET_PIXELS` of them (none: empty)."""
+    """Pixels with two usable pairs or more, drawn until they hold :data:`SUBSET_PAIRS`.
+
+    At most :data:`SUBSET_PIXELS` of them (none: empty).
+    """
     values = recording.frames.reshape(len(recording.frames), -1)
     inside = (values > levels.low) & (values < levels.high)
     usable = (inside[:-1] & inside[1:] & pairs[:, None]).sum(axis=0)
