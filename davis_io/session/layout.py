@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import h5py
 import numpy as np
 
@@ -151,8 +153,8 @@ def append_rows(dataset: h5py.Dataset, rows: np.ndarray) -> None:
     dataset[start:] = rows
 
 
-def write_bins_row(group: h5py.Group, bins: ExposureBins) -> None:
-    """Append one frame's bins to a ``/bins/b{b}`` group (``event_count`` last)."""
+def write_bins_row(group: Mapping[str, h5py.Dataset], bins: ExposureBins) -> None:
+    """Append one frame's bins to a ``/bins/b{b}`` group or its datasets (``event_count`` last)."""
     append_rows(group["split_us"], bins.split_us[None])
     append_rows(group["weights"], bins.weights[None])
     append_rows(group["raw"], bins.raw[None])

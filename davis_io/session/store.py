@@ -398,6 +398,7 @@ class Session(Closing):
             if bins_path(b) in h5:
                 del h5[bins_path(b)]
             group = create_bins_group(h5, b=b, width=self.width, height=self.height, live=False)
+            columns = dict(group.items())  # opened once: see SessionWriter._enter_swmr
             try:
                 for start_us, end_us in zip(
                     table.exposure_start_us, table.exposure_end_us, strict=True
@@ -408,7 +409,7 @@ class Session(Closing):
                         window, int(start_us), int(end_us), b, self.width, self.height
                     )
                     with storage_errors(self.h5_path):
-                        write_bins_row(group, exposure)
+                        write_bins_row(columns, exposure)
             except BaseException as error:  # a full disk, Ctrl-C, SIGTERM
                 del h5[bins_path(b)]  # never listed as stored when partial
                 if not isinstance(error, OSError):

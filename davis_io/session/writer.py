@@ -225,7 +225,7 @@ class SessionWriter:
             )
         self._check_space()
         with storage_errors(self.path):
-            write_bins_row(self._h5[bins_path(self.b)], bins)
+            write_bins_row(self._columns["bins"], bins)
             append_rows(frames["image"], frame.image[None].astype(frames["image"].dtype))
             append_rows(frames["events_lost"], np.array([events_lost]))
             for name in FRAME_TIMES:
@@ -286,8 +286,14 @@ class SessionWriter:
             check_free_space(self.path.parent, "a recording")
 
     def _enter_swmr(self) -> None:
+        """Enter SWMR mode and open every dataset written to, held until the file closes.
+
+        A dataset opened for one write and freed after it would flush its chunks on a disk that
+        may have filled meanwhile, outside any handler: HDF5 then crashes the process.
+        """
         self._h5.swmr_mode = True
-        self._columns = {group: dict(self._h5[group].items()) for group in ("frames", *_KINDS)}
+        groups = {kind: kind for kind in ("frames", *_KINDS)} | {"bins": bins_path(self.b)}
+        self._columns = {kind: dict(self._h5[name].items()) for kind, name in groups.items()}
 
     def _add_image_dataset(self, image_dtype, bit_depth: int) -> None:
         """Close, reopen, create ``/frames/image`` and return to SWMR mode."""
