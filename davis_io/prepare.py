@@ -7,6 +7,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from davis_io.calibration.session_calibration import session_calibration
+from davis_io.cores import cores_limited
 from davis_io.lens import read_camera_calibration
 from davis_io.poses.estimate import estimate_poses, made_with
 from davis_io.session import Session
@@ -19,6 +20,7 @@ def prepare_session(
     b: int,
     log: Callable[[str], None] = print,
     camera_calibration: Path | None = None,
+    threads: int = 0,
 ) -> float:
     """Calibrate the sensor and estimate poses for ``b`` if the session lacks them.
 
@@ -29,6 +31,7 @@ def prepare_session(
         camera_calibration: a calibration file of the camera's lens (read by
             :func:`davis_io.lens.read_camera_calibration`); poses made with another lens are
             estimated again with this one, held fixed.
+        threads: the cores the calibration's and COLMAP's thread pools may use (0: all).
 
     Returns:
         The seconds spent.
@@ -38,7 +41,7 @@ def prepare_session(
         SessionError, UsageError: the session cannot be read or written.
     """
     start = time.perf_counter()
-    with Session.open(session_dir) as session:
+    with cores_limited(threads), Session.open(session_dir) as session:
         lens = None
         if camera_calibration is not None:
             lens = read_camera_calibration(camera_calibration, session.width, session.height)

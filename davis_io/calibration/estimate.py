@@ -42,6 +42,7 @@ from davis_io.calibration.response_fit import (
     place_knots,
 )
 from davis_io.calibration.scale import CommonScale, common_scale
+from davis_io.cores import usable_cores
 from davis_io.errors import UsageError
 from davis_io.gaps import overlapping
 from davis_io.session.calibration import SensorCalibration
@@ -68,9 +69,6 @@ uncertainty, so 4,000 pixels measure them as well in half the time."""
 
 SUBSET_PIXELS = 8_000
 """Pixels the global fits use at most (a recording of few or short pairs)."""
-
-FACTOR_WORKERS = 2
-"""Blocks of pixels fitted at once."""
 
 BLOCK_PIXELS = 4096
 """Pixels whose factors are fitted together. A whole DAVIS346 at once (17 M events) took 26 s
@@ -251,8 +249,8 @@ def _sensor_factors(
     """Every sensor pixel's ON and OFF factors at the subset's thresholds, latency and response.
 
     Each pixel's factors depend on its own pairs alone, so the search runs on the subset and
-    every pixel is fitted once, at its end, a block of pixels at a time (two blocks at once:
-    numpy lets go of the interpreter inside its loops).
+    every pixel is fitted once, at its end, a block of pixels at a time (a block per usable
+    core at once: numpy lets go of the interpreter inside its loops).
     """
     _, response = problem.solve(*theta)
 
@@ -264,7 +262,7 @@ def _sensor_factors(
         refine_pixel_factors(found, theta, response)
         return found.factor_on, found.factor_off, found.usable.sum(axis=0)
 
-    with ThreadPoolExecutor(FACTOR_WORKERS) as pool:
+    with ThreadPoolExecutor(usable_cores()) as pool:
         factor_on, factor_off, pairs = zip(*pool.map(fitted, _pixel_blocks(recording)), strict=True)
     factors = np.concatenate(factor_on), np.concatenate(factor_off)
     normalise_factors(*factors, np.concatenate(pairs), theta)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-import os
 import shutil
 import signal
 import threading
@@ -22,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from davis_io.cores import usable_cores
 from davis_io.errors import DavisIOError
 from davis_io.geometry import (
     c2w_from_w2c,
@@ -179,7 +179,7 @@ def extract_features(
     )
     extraction = pycolmap.FeatureExtractionOptions()
     extraction.use_gpu = False
-    extraction.num_threads = len(os.sched_getaffinity(0))
+    extraction.num_threads = usable_cores()
     pycolmap.extract_features(
         database,
         image_dir,

@@ -88,8 +88,9 @@ class FitConfig:
         validation_share: fraction of training pixels held out for the progress PSNR.
         exposures_s: exposures of the rendered LDR brackets (empty: the truth's or the
             paper's five).
-        threads: CPU threads of each pool: torch's, numpy's BLAS, OpenCV's (0: ``seecap fit``
-            takes the cores other work leaves free, one thread each).
+        threads: CPU threads of each pool: torch's, numpy's BLAS, OpenCV's, the calibration's
+            and COLMAP's (0: ``seecap fit`` takes the cores other work leaves free, one thread
+            each).
         batch_pixels: blurry pixels per step (0: the preset's).
         warm_steps: CRF warm-start steps (-1: the preset's, the reference's 500).
         register_test_views: before scoring a fit made from estimated poses, refine each

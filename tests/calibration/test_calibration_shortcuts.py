@@ -1,5 +1,7 @@
 """What the calibration does to save time gives what the long way gives."""
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 import pytest
 from synthetic_recording import KnownSensor, synthetic_recording
@@ -8,6 +10,7 @@ from davis_io.calibration import dead_time as dead_time_module
 from davis_io.calibration import estimate
 from davis_io.calibration.consistency import KNOTS, fit_pixel_factors
 from davis_io.calibration.response_fit import frame_levels, place_knots
+from davis_io.cores import cores_limited
 from davis_io.emulator import Response
 
 
@@ -26,14 +29,27 @@ def _problems(recording, pixels):
     return estimate._Problems(recording, pixels, levels, knots, pairs)
 
 
-def test_every_pixels_factors_fitted_block_by_block_equal_one_fit_of_all(recording, monkeypatch):
+@pytest.mark.parametrize("cores", [1, 2])
+def test_every_pixels_factors_fitted_block_by_block_equal_one_fit_of_all(
+    recording, monkeypatch, cores
+):
     # 64 x 48 = 3,072 pixels in blocks of 1,000: three whole blocks and one of 72.
     monkeypatch.setattr(estimate, "BLOCK_PIXELS", 1000)
+    workers = []
+
+    class CountedPool(ThreadPoolExecutor):
+        def __init__(self, max_workers):
+            workers.append(max_workers)
+            super().__init__(max_workers)
+
+    monkeypatch.setattr(estimate, "ThreadPoolExecutor", CountedPool)
     height, width = recording.shape
     subset = _problems(recording, np.arange(0, height * width, 5))
     problem = subset.at(2000)
     theta = np.array([0.26, 0.33])
-    on, off = estimate._sensor_factors(recording, subset, problem, theta)
+    with cores_limited(cores):
+        on, off = estimate._sensor_factors(recording, subset, problem, theta)
+    assert workers == [cores]  # a fit told to use one core keeps to it
     every = _problems(recording, np.arange(height * width)).at(2000)
     fit_pixel_factors(every, theta, problem.solve(*theta)[1])
     np.testing.assert_allclose(on, every.factor_on, rtol=1e-9)

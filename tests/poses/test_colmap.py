@@ -7,6 +7,7 @@ import pycolmap
 import pytest
 from pose_scenes import HEIGHT, INTRINSICS, WIDTH, orbit_poses, render_box, texture
 
+from davis_io.cores import cores_limited
 from davis_io.geometry import align_poses, rotation_error_deg
 from davis_io.lens import Lens
 from davis_io.poses import recovery
@@ -55,10 +56,11 @@ def test_features_extracted_on_two_threads_are_those_of_one_with_ids_in_names_or
     tmp_path, monkeypatch
 ):
     names = [name for (name,) in write_views(tmp_path / "images", orbit_poses(6))][::-1]
+    monkeypatch.setattr("os.sched_getaffinity", lambda _pid: {0, 1})
     found = {}
     for threads in (1, 2):
-        monkeypatch.setattr("os.sched_getaffinity", lambda _pid, n=threads: set(range(n)))
-        database = extract_features(tmp_path / f"t{threads}", tmp_path / "images", names)
+        with cores_limited(threads):
+            database = extract_features(tmp_path / f"t{threads}", tmp_path / "images", names)
         with pycolmap.Database.open(database) as opened:
             images = sorted(opened.read_all_images(), key=lambda image: image.image_id)
             found[threads] = [
