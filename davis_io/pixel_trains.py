@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["Neighbours", "PixelTrains", "pixel_trains"]
+__all__ = ["Neighbours", "PixelTrains", "pixel_order", "pixel_trains"]
 
 _TIME_BITS = 36
 """Bits of a time in its key: 19 hours of microsecond ticks (9.5 of half microseconds)."""
@@ -107,5 +107,19 @@ def pixel_trains(
     pixel = np.asarray(pixel, np.int64)
     if pixel_count is None:
         pixel_count = int(pixel.max()) + 1 if len(pixel) else 0
-    order = np.argsort(pixel, kind="stable")  # each pixel's events stay in time order
+    order = pixel_order(pixel, pixel_count)
     return PixelTrains(pixel[order], np.asarray(time_us)[order], order, pixel_count, tick_us)
+
+
+def pixel_order(pixel: np.ndarray, pixel_count: int) -> np.ndarray:
+    """The stable order that groups events by pixel, each pixel's events kept in their order.
+
+    A radix sort where the pixels fit 16 bits (numpy's stable sort of 16-bit keys), which is
+    several times faster than a merge sort of wider keys.
+
+    Args:
+        pixel: ``(N,)`` each event's pixel (or any group number), ``0 .. pixel_count - 1``.
+        pixel_count: P.
+    """
+    keys = np.asarray(pixel, np.uint16 if pixel_count <= 1 << 16 else np.int64)
+    return np.argsort(keys, kind="stable")

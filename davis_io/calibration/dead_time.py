@@ -25,25 +25,22 @@ percentile was within 1 µs of all 17 M events' on an emulated room (545 µs eit
 fifth of the time."""
 
 
-def dead_time_us(times_us: np.ndarray, x: np.ndarray, y: np.ndarray, width: int) -> int:
+def dead_time_us(times_us: np.ndarray, pixel: np.ndarray) -> int:
     """The :data:`DEAD_TIME_PERCENTILE` of the intervals between consecutive events of a pixel.
 
     Args:
         times_us: ``(N,)`` event times, µs, in order (as a camera sends them).
-        x: ``(N,)`` event columns.
-        y: ``(N,)`` event rows.
-        width: sensor width (pixels are keyed ``y * width + x``).
+        pixel: ``(N,)`` each event's pixel, a non-negative integer (``y * width + x``).
 
     Every pixel's events are read up to about :data:`SAMPLE_EVENTS`, then those of every n-th.
 
     Returns:
         The interval in µs, 0 when fewer than two events share a pixel.
     """
-    pixel = y.astype(np.int64) * width + x
     stride = -(-len(pixel) // SAMPLE_EVENTS)
     if stride > 1:
         chosen = pixel % stride == 0
-        pixel, times_us = pixel[chosen], times_us[chosen]
+        pixel, times_us = pixel[chosen] // stride, times_us[chosen]  # numbered 0, 1, 2 ...
     intervals = pixel_trains(pixel, np.asarray(times_us, np.int64)).intervals()
     if len(intervals) == 0:
         return 0

@@ -37,7 +37,7 @@ from functools import cached_property
 
 import numpy as np
 
-from davis_io.pixel_trains import PixelTrains
+from davis_io.pixel_trains import PixelTrains, pixel_order
 
 __all__ = ["EventPath", "LogBlur", "PixelEvents", "event_path", "log_blur", "pixel_events"]
 
@@ -111,9 +111,7 @@ def event_path(
         is_on: ``(N,)`` bool polarity.
         pixel_count: P.
     """
-    # Then by time; a radix sort where the indices fit 16 bits (a block of pixels, a subset).
-    keys = np.asarray(pixel_index, np.uint16 if pixel_count <= 1 << 16 else np.int64)
-    order = np.argsort(keys, kind="stable")
+    order = pixel_order(pixel_index, pixel_count)  # then by time
     time = np.asarray(times_us, np.int64)[order].astype(np.float64)
     pixel = np.asarray(pixel_index, np.int64)[order]
     on = np.asarray(is_on, bool)[order]

@@ -90,10 +90,9 @@ def test_the_dead_time_of_every_nth_pixel_is_the_dead_time_of_all(monkeypatch):
     pixel = np.repeat(np.arange(400), 40)
     order = np.argsort(times, kind="stable")
     times, pixel = times[order], pixel[order]
-    x, y = (pixel % 20).astype(np.uint16), (pixel // 20).astype(np.uint16)
-    whole = dead_time_module.dead_time_us(times, x, y, 20)
+    whole = dead_time_module.dead_time_us(times, pixel)
     monkeypatch.setattr(dead_time_module, "SAMPLE_EVENTS", 4_000)
-    assert dead_time_module.dead_time_us(times, x, y, 20) == whole == 1500
+    assert dead_time_module.dead_time_us(times, pixel) == whole == 1500
 
 
 @pytest.mark.parametrize("linear_black", [None, 0.02])

@@ -7,13 +7,16 @@ from davis_io.calibration.dead_time import dead_time_us
 from davis_io.emulator.dvs import DvsParams, DvsPixels
 
 
-def _stream(times_by_pixel: dict[tuple[int, int], np.ndarray]):
-    """Events of several pixels merged in time order, as a camera sends them."""
+def _stream(times_by_pixel: dict[tuple[int, int], np.ndarray], width: int):
+    """Events of several ``(x, y)`` pixels merged in time order, as a camera sends them.
+
+    Returns:
+        Times and pixels ``y * width + x``.
+    """
     times = np.concatenate(list(times_by_pixel.values()))
-    x = np.concatenate([np.full(len(t), key[0]) for key, t in times_by_pixel.items()])
-    y = np.concatenate([np.full(len(t), key[1]) for key, t in times_by_pixel.items()])
+    pixel = np.concatenate([np.full(len(t), y * width + x) for (x, y), t in times_by_pixel.items()])
     order = np.argsort(times, kind="stable")
-    return times[order], x[order].astype(np.uint16), y[order].astype(np.uint16)
+    return times[order], pixel[order]
 
 
 def test_a_rate_limited_burst_sets_the_dead_time():
@@ -21,26 +24,26 @@ def test_a_rate_limited_burst_sets_the_dead_time():
     # with); pixel (0, 2) fires 100 times 5-50 ms apart: 299 of the 398 intervals are 1200 µs,
     # the others longer, so the 1st percentile is 1200.
     rng = np.random.default_rng(0)
-    times, x, y = _stream(
+    times, pixel = _stream(
         {
             (3, 1): 1000 + 1200 * np.arange(300),
             (0, 2): np.cumsum(rng.integers(5000, 50000, 100)),
-        }
+        },
+        width=4,
     )
-    assert dead_time_us(times, x, y, width=4) == 1200
+    assert dead_time_us(times, pixel) == 1200
 
 
 def test_without_a_refractory_period_the_intervals_reach_down_to_zero():
     # 10,001 events of one pixel with intervals uniform in 0-10,000 µs: 1st percentile ~100 µs.
     rng = np.random.default_rng(1)
     times = np.cumsum(rng.integers(0, 10_001, 10_001))
-    zeros = np.zeros(len(times), np.uint16)
-    assert dead_time_us(times, zeros, zeros, width=1) == pytest.approx(100, abs=30)
+    assert dead_time_us(times, np.zeros(len(times), int)) == pytest.approx(100, abs=30)
 
 
 def test_no_pixel_firing_twice_has_no_dead_time():
-    times, x, y = _stream({(0, 0): np.array([5]), (1, 0): np.array([7])})
-    assert dead_time_us(times, x, y, width=2) == 0
+    times, pixel = _stream({(0, 0): np.array([5]), (1, 0): np.array([7])}, width=2)
+    assert dead_time_us(times, pixel) == 0
 
 
 @pytest.mark.parametrize(("refractory_us", "low", "high"), [(1500, 1500, 1700), (0, 0, 100)])
@@ -55,4 +58,5 @@ def test_the_emulated_pixels_refractory_period_is_measured(refractory_us, low, h
         log_intensity = 10 - abs(step % 40 - 20) + offsets
         events.append(pixels.step(np.exp(log_intensity) / 255, 1000 * step))
     events = np.concatenate(events)
-    assert low <= dead_time_us(events["t"], events["x"], events["y"], 4) <= high
+    pixel = events["y"].astype(int) * 4 + events["x"]
+    assert low <= dead_time_us(events["t"], pixel) <= high
