@@ -55,7 +55,7 @@ def prepare_and_fit(
     limit_threads(threads)
     book(why)
     spent_s = prepare_session(
-        session_dir, session_bins(session_dir, config), book, camera_calibration, threads
+        session_dir, session_bins(session_dir, config), book, camera_calibration, threads=threads
     )
     return fit_session(
         session_dir,

@@ -61,7 +61,7 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
 
     seen = {}
 
-    def fake_prepare(session, b, log=print, camera_calibration=None):
+    def fake_prepare(session, b, log=print, camera_calibration=None, threads=0):
         seen["prepared"] = (session, b)
         return 12.5
 
@@ -100,7 +100,7 @@ def test_a_fits_log_holds_the_preparation_and_its_config_the_software(monkeypatc
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
 
-    def fake_prepare(session, b, log=print, camera_calibration=None):
+    def fake_prepare(session, b, log=print, camera_calibration=None, threads=0):
         log("measuring the sensor from the recording")
         log("estimating poses (b=2)")
         return 1.0
@@ -136,7 +136,7 @@ def test_a_stopped_fit_exits_143_with_one_line(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(
         seenerf.cli.sessions,
         "prepare_session",
-        lambda session, b, log=print, camera_calibration=None: 0.0,
+        lambda session, b, log=print, camera_calibration=None, threads=0: 0.0,
     )
     monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)
     monkeypatch.setattr(seenerf.cli.sessions, "fit_session", stopped)
