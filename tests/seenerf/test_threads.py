@@ -92,6 +92,7 @@ def test_a_fit_with_automatic_threads_gives_a_core_up_when_other_work_starts(
     before = torch.get_num_threads()
     lines = []
     try:
+        torch.set_num_threads(2)  # whatever an earlier test left
         config = FitConfig(steps=3, batch_pixels=8, warm_steps=2, validation_share=0.1)
         Trainer(tiny_scene, config, log=lines.append).train()
         assert torch.get_num_threads() == 1
