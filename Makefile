@@ -24,8 +24,9 @@ demo: $(STAMP)
 	$(BIN)/seecap record --emulate room --exposure 0.15 --out $(DEMO_DIR) --overwrite
 	$(BIN)/seecap fit $(DEMO_DIR) --preset fast --time-budget 10m
 
+# One worker per core; a file's tests stay in one worker (its module fixtures are made once).
 test: $(STAMP)
-	$(BIN)/python -m pytest -q; status=$$?; \
+	$(BIN)/python -m pytest -q -n auto --dist loadfile; status=$$?; \
 	if [ $$status -eq 5 ]; then echo "make test: pytest collected no tests" >&2; exit 1; fi; \
 	exit $$status
 
