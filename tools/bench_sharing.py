@@ -1,0 +1,115 @@
+"""Sharing benchmark: a fit's training speed alone and beside one busy process.
+
+    python tools/bench_sharing.py [--out bench-out/sharing] [--steps 300] [--publish]
+
+Records one scene (``seecap record --emulate``), measures its sensor and poses once, then fits
+it three times in turn with ``seecap fit --preset fast --steps N``: alone, and beside a process
+that keeps one core busy, once with the threads the fit chooses and once with one thread per
+core asked for. Each row: the threads the fit used and its steps per second of training. Writes
+``OUT/sharing.json`` and ``OUT/sharing.md``; ``--publish`` copies the JSON to ``bench-results/``
+and splices the report into BENCHMARKS.md between its sharing markers. About 10 minutes on 2
+cores.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from benchlib.machine import run_header
+from benchlib.publish import SHARING_BEGIN, SHARING_END, keep_report, report_parser
+from benchlib.runner import python_command, run_measured
+from benchlib.sharing import SHARING_CASES, sharing_report
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE, SEED, FRAMES = "room", 7, 16
+TIMEOUT_S = 3600.0
+BUSY = "while True: pass"
+"""The busy process: one core kept at 100 %, as another single-threaded job would."""
+
+
+def _seecap(*arguments: str) -> list[str]:
+    return python_command("-m", "davis_io.cli", *arguments)
+
+
+def _prepared(out: Path) -> Path:
+    """The recorded session, its sensor measured and poses estimated."""
+    folder = out / "sessions" / SCENE
+    steps = [
+        ["record", "--emulate", SCENE, "--seed", str(SEED), "--frames", str(FRAMES)]
+        + ["--out", str(folder), "--overwrite"],
+        ["calibrate", str(folder)],
+        ["poses", str(folder)],
+    ]
+    if (folder / "colmap" / "report.json").exists():
+        steps = []
+    for number, argv in enumerate(steps):
+        usage = run_measured(_seecap(*argv), out / "logs" / f"prepare-{number}.log")
+        if usage.returncode != 0:
+            raise SystemExit(f"seecap {argv[0]} failed: see {out / 'logs'}")
+    return folder
+
+
+def _threads_used(log_text: str) -> str:
+    """The thread count a fit's log states (``threads: 1 of 2 cores ...``)."""
+    for line in log_text.splitlines():
+        if "threads: " in line:
+            return line.split("threads: ", 1)[1].split(" ", 1)[0]
+    return "?"
+
+
+def _fit(name: str, session: Path, steps: int, out: Path) -> dict:
+    argv = ["fit", str(session), "--preset", "fast", "--steps", str(steps), "--run", name]
+    argv += ["--fresh"]
+    if name == "busy-all":
+        argv += ["--threads", str(len(os.sched_getaffinity(0)))]
+    busy = None
+    if name.startswith("busy"):
+        busy = subprocess.Popen([sys.executable, "-c", BUSY])
+    try:
+        usage = run_measured(_seecap(*argv), out / "logs" / f"fit-{name}.log", timeout_s=TIMEOUT_S)
+    finally:
+        if busy is not None:
+            busy.kill()
+            busy.wait()
+    if usage.returncode != 0:
+        return {"error": f"seecap fit exited {usage.returncode}; see logs/fit-{name}.log"}
+    run = session / "fit" / name
+    training = json.loads((run / "metrics.json").read_text())["training"]
+    return {
+        "threads": _threads_used((run / "log.txt").read_text()),
+        "steps": training["steps"],
+        "training_s": training["elapsed_s"],
+        "steps_per_s": training["steps"] / training["elapsed_s"],
+        "wall_s": usage.wall_s,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = report_parser(__doc__.splitlines()[0], "bench-out/sharing")
+    parser.add_argument("--steps", type=int, default=300, help="training steps of each fit")
+    args = parser.parse_args(argv)
+    out = args.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    document = {
+        **run_header(),
+        "scene": SCENE,
+        "seed": SEED,
+        "frames": FRAMES,
+        "fit": f"seecap fit SESSION --preset fast --steps {args.steps} [--threads CORES]",
+        "busy": f"python -c '{BUSY}'",
+    }
+    session = _prepared(out)
+    document["cases"] = {name: _fit(name, session, args.steps, out) for name in SHARING_CASES}
+    markers = (SHARING_BEGIN, SHARING_END)
+    keep_report(
+        out, "sharing", document, sharing_report(document), markers, ROOT if args.publish else None
+    )
+    return 1 if any("error" in case for case in document["cases"].values()) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
