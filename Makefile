@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 TORCH_PIN ?= torch==2.13.0
 DEMO_DIR ?= demo-session
 
-.PHONY: install demo test fuzz browser bench bench-quick bench-blind bench-cluster bench-lens lint clean
+.PHONY: install demo test fuzz browser bench bench-quick bench-blind bench-cluster bench-lens bench-sharing lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -49,6 +49,7 @@ bench: $(STAMP)
 	$(BIN)/python tools/bench.py --publish $(RAY_OPTION)
 	$(BIN)/python tools/bench_blind.py --jobs 2 --publish $(RAY_OPTION)
 	$(BIN)/python tools/bench_lens.py --publish
+	$(BIN)/python tools/bench_sharing.py --publish
 
 # The blind-camera benchmark alone: six randomly drawn sensors, each fitted from its recording.
 bench-blind: $(STAMP)
@@ -61,6 +62,10 @@ bench-cluster: $(STAMP)
 # One scene through an undistorted and a distorted lens: the lens known, estimated or ignored.
 bench-lens: $(STAMP)
 	$(BIN)/python tools/bench_lens.py --publish
+
+# A fit's training speed alone and beside one busy process (the threads it chooses, every core).
+bench-sharing: $(STAMP)
+	$(BIN)/python tools/bench_sharing.py --publish
 
 lint: $(STAMP)
 	$(BIN)/pip install -q ruff
