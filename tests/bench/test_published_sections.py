@@ -15,10 +15,13 @@ from benchlib.publish import (
     END,
     LENS_BEGIN,
     LENS_END,
+    SHARING_BEGIN,
+    SHARING_END,
     as_published,
 )
 from benchlib.readback import report_from_json
 from benchlib.report import render_markdown
+from benchlib.sharing import sharing_report
 from benchlib.side_by_side import side_by_side_report
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -35,8 +38,9 @@ def _section(begin: str, end: str) -> str:
         ("blind.json", blind_report, BLIND_BEGIN, BLIND_END),
         ("cluster.json", side_by_side_report, CLUSTER_BEGIN, CLUSTER_END),
         ("lens.json", lens_report, LENS_BEGIN, LENS_END),
+        ("sharing.json", sharing_report, SHARING_BEGIN, SHARING_END),
     ],
-    ids=["blind", "cluster", "lens"],
+    ids=["blind", "cluster", "lens", "sharing"],
 )
 def test_a_generated_section_holds_what_its_results_file_renders_to(name, render, begin, end):
     document = json.loads((ROOT / "bench-results" / name).read_text())
