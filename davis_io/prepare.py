@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from davis_io.calibration.session_calibration import session_calibration
@@ -12,7 +13,23 @@ from davis_io.lens import read_camera_calibration
 from davis_io.poses.estimate import estimate_poses, made_with
 from davis_io.session import Session
 
-__all__ = ["StageLines", "prepare_session"]
+__all__ = [
+    "PreparationEstimate",
+    "StageLines",
+    "estimate_preparation",
+    "preparation_seconds",
+    "prepare_session",
+]
+
+CALIBRATION_S_PER_MILLION_EVENTS = 1.1
+"""The calibration's seconds per million events on 2 cores: about 19 s for 16.9 M events (an
+emulated room) and 25 s for 24 M (a bright lamp)."""
+POSES_S_PER_PAIR = 0.012
+"""Exhaustive matching's seconds per pair of latent frames, on one thread: 24-39 s for the
+3,160 pairs of 80 latent frames."""
+POSES_S_PER_IMAGE = 0.45
+"""Seconds per latent frame of the rest of the pose stage (EDI, features, mapping, the lens):
+23-36 s for 80."""
 
 
 def prepare_session(
@@ -58,6 +75,71 @@ def prepare_session(
             log(report.summary())
             log(f"poses estimated in {time.perf_counter() - begun:.0f} s")
     return time.perf_counter() - start
+
+
+@dataclass(frozen=True)
+class PreparationEstimate:
+    """What :func:`prepare_session` will take, estimated from the session's size before it starts.
+
+    Attributes:
+        calibration_s: seconds to measure the sensor (0 when stored).
+        poses_s: seconds to estimate the poses (0 when stored; a doubtful calibration, which
+            makes COLMAP reconstruct twice, is not foreseen).
+        events: events of the recording.
+        latent_frames: latent frames the poses would be estimated for.
+    """
+
+    calibration_s: float
+    poses_s: float
+    events: int
+    latent_frames: int
+
+    @property
+    def total_s(self) -> float:
+        """Seconds of both steps."""
+        return self.calibration_s + self.poses_s
+
+    def summary(self) -> str:
+        """One line: what each step to come should take and what it is estimated from."""
+        steps = []
+        if self.calibration_s:
+            steps.append(
+                f"about {self.calibration_s:.0f} s to measure the sensor "
+                f"({self.events / 1e6:.1f} M events)"
+            )
+        if self.poses_s:
+            steps.append(f"{self.poses_s:.0f} s for poses ({self.latent_frames} latent frames)")
+        if not steps:
+            return "the sensor and poses are stored"
+        return " and ".join(steps)
+
+
+def preparation_seconds(
+    events: int, latent_frames: int, *, calibrated: bool, posed: bool
+) -> PreparationEstimate:
+    """:class:`PreparationEstimate` from the session's counts and what it already holds."""
+    pairs = latent_frames * (latent_frames - 1) / 2
+    return PreparationEstimate(
+        calibration_s=0.0 if calibrated else CALIBRATION_S_PER_MILLION_EVENTS * events / 1e6,
+        poses_s=0.0 if posed else POSES_S_PER_PAIR * pairs + POSES_S_PER_IMAGE * latent_frames,
+        events=events,
+        latent_frames=latent_frames,
+    )
+
+
+def estimate_preparation(session_dir: Path | str, b: int) -> PreparationEstimate:
+    """What :func:`prepare_session` with ``b`` bins will take on this session.
+
+    Raises:
+        SessionError: the session cannot be read.
+    """
+    with Session.open(session_dir) as session:
+        return preparation_seconds(
+            session.event_count,
+            session.frame_count * (b + 1),
+            calibrated=session.calibration() is not None,
+            posed=session.poses(b) is not None,
+        )
 
 
 class StageLines:

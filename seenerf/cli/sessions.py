@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from davis_io import describe_error
-from davis_io.prepare import prepare_session
+from davis_io.prepare import estimate_preparation, prepare_session
 from seenerf.errors import TrainingStopped
 from seenerf.model.config import FitConfig
 from seenerf.train.fit import FitResult, LogBook, fit_session, session_bins
@@ -54,9 +54,14 @@ def prepare_and_fit(
     threads, why = choose_threads(config.threads)
     limit_threads(threads)
     book(why)
-    spent_s = prepare_session(
-        session_dir, session_bins(session_dir, config), book, camera_calibration, threads=threads
-    )
+    bins = session_bins(session_dir, config)
+    if config.time_budget_s > 0:
+        plan = estimate_preparation(session_dir, bins)
+        book(
+            f"budget {config.time_budget_s:.0f} s: {plan.summary()}, then training and the final "
+            f"renders in the {max(config.time_budget_s - plan.total_s, 0):.0f} s left"
+        )
+    spent_s = prepare_session(session_dir, bins, book, camera_calibration, threads=threads)
     return fit_session(
         session_dir,
         config,

@@ -125,6 +125,34 @@ def test_a_fits_log_holds_the_preparation_and_its_config_the_software(monkeypatc
     assert any(line.startswith("report.html not written") for line in shown)
 
 
+def test_a_fit_with_a_budget_says_what_its_preparation_should_take_first(monkeypatch, tmp_path):
+    import seenerf.cli.sessions
+    from davis_io.prepare import preparation_seconds
+    from seenerf.cli.sessions import prepare_and_fit
+
+    class Stop(Exception):
+        pass
+
+    def fake_prepare(session, b, log=print, camera_calibration=None, threads=0):
+        raise Stop
+
+    estimate = preparation_seconds(24_000_000, 80, calibrated=False, posed=False)
+    monkeypatch.setattr(seenerf.cli.sessions, "estimate_preparation", lambda folder, b: estimate)
+    monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", fake_prepare)
+    monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)
+    shown = []
+    with pytest.raises(Stop):
+        prepare_and_fit(tmp_path, FitConfig(time_budget_s=600.0, threads=1), log=shown.append)
+    assert shown[1] == (
+        "budget 600 s: about 26 s to measure the sensor (24.0 M events) and 74 s for poses "
+        "(80 latent frames), then training and the final renders in the 500 s left"
+    )
+    shown.clear()
+    with pytest.raises(Stop):
+        prepare_and_fit(tmp_path, FitConfig(threads=1), log=shown.append)
+    assert not [line for line in shown if line.startswith("budget")]  # no budget, no plan
+
+
 def test_a_stopped_fit_exits_143_with_one_line(monkeypatch, tmp_path, capsys):
     import seenerf.cli.sessions
     from davis_io.cli import main
