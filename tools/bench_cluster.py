@@ -20,7 +20,7 @@ from pathlib import Path
 
 from benchlib.cluster import FIT_THREADS
 from benchlib.machine import run_header
-from benchlib.publish import CLUSTER_BEGIN, CLUSTER_END, keep_report, report_parser
+from benchlib.publish import keep_report, report_parser
 from benchlib.side_by_side import ROW_FIELDS, side_by_side_report
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -67,8 +67,7 @@ def main(argv: list[str] | None = None) -> int:
         document["runs"][way] = _run(way, out)
         print(f"{way}: {document['runs'][way]['wall_s'] / 60:.1f} min")
     report = side_by_side_report(document)
-    markers = (CLUSTER_BEGIN, CLUSTER_END)
-    keep_report(out, "cluster", document, report, markers, ROOT if args.publish else None)
+    keep_report(out, "cluster", document, report, args.publish)
     failed = [way for way, run in document["runs"].items() if run["returncode"] != 0]
     return 1 if failed else 0
 

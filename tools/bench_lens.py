@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from benchlib.lens import LENS_CASES, lens_report
 from benchlib.machine import run_header
-from benchlib.publish import LENS_BEGIN, LENS_END, keep_report, report_parser
+from benchlib.publish import keep_report, report_parser
 from benchlib.runner import python_command, run_measured
 
 from davis_io.emulator import EmulatedCamera
@@ -31,7 +31,6 @@ from davis_io.lens import write_camera_calibration
 from davis_io.poses.truth import compare_with_truth
 from davis_io.session import DEFAULT_BINS, Session
 
-ROOT = Path(__file__).resolve().parents[1]
 SCENE, SEED, FRAMES = "room", 7, 16
 RUN = "lens"
 TIMEOUT_S = 3600.0
@@ -117,10 +116,7 @@ def main(argv: list[str] | None = None) -> int:
             for name in LENS_CASES
         }
         document["cases"] = {name: future.result() for name, future in futures.items()}
-    markers = (LENS_BEGIN, LENS_END)
-    keep_report(
-        out, "lens", document, lens_report(document), markers, ROOT if args.publish else None
-    )
+    keep_report(out, "lens", document, lens_report(document), args.publish)
     return 1 if any("error" in case for case in document["cases"].values()) else 0
 
 

@@ -25,11 +25,10 @@ from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 from benchlib.machine import run_header
-from benchlib.publish import SHARING_BEGIN, SHARING_END, keep_report, report_parser
+from benchlib.publish import keep_report, report_parser
 from benchlib.runner import python_command, run_measured
 from benchlib.sharing import SHARING_CASES, sharing_report
 
-ROOT = Path(__file__).resolve().parents[1]
 SCENE, SEED, FRAMES = "room", 7, 16
 TIMEOUT_S = 3600.0
 BUSY = "while True: pass"
@@ -138,10 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     }
     session = _prepared(out)
     document["cases"] = {name: _fit(name, session, args.steps, out) for name in SHARING_CASES}
-    markers = (SHARING_BEGIN, SHARING_END)
-    keep_report(
-        out, "sharing", document, sharing_report(document), markers, ROOT if args.publish else None
-    )
+    keep_report(out, "sharing", document, sharing_report(document), args.publish)
     return 1 if any("error" in case for case in document["cases"].values()) else 0
 
 

@@ -82,3 +82,22 @@ def test_render_only_writes_the_report_again_from_results_json(tmp_path, capsys)
     (tmp_path / "results.json").write_text(json.dumps(payload))
     assert bench.main(["--out", str(tmp_path), "--render-only"]) == 1
     assert "RunRow has no field mapped_hdr_psnr" in capsys.readouterr().err
+
+
+def test_a_kept_report_is_published_between_its_tools_markers(tmp_path, monkeypatch, capsys):
+    from benchlib import publish as publish_module
+
+    begin, end = publish_module.section_markers("bench_sharing.py")
+    assert (begin, end) == (publish_module.SHARING_BEGIN, publish_module.SHARING_END)
+    (tmp_path / "BENCHMARKS.md").write_text(f"# head\n{begin}\nold\n{end}\ntail\n")
+    monkeypatch.setattr(publish_module, "REPOSITORY", tmp_path)
+    out = tmp_path / "out"
+    out.mkdir()
+    publish_module.keep_report(out, "sharing", {"a": 1}, "| new |", publish=False)
+    assert (out / "sharing.md").read_text() == "| new |\n" and "| new |" in capsys.readouterr().out
+    assert "old" in (tmp_path / "BENCHMARKS.md").read_text()  # not published
+    publish_module.keep_report(out, "sharing", {"a": 1}, "| new |", publish=True)
+    assert (
+        tmp_path / "BENCHMARKS.md"
+    ).read_text() == f"# head\n{begin}\n\n| new |\n\n{end}\ntail\n"
+    assert json.loads((tmp_path / "bench-results" / "sharing.json").read_text()) == {"a": 1}

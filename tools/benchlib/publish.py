@@ -20,6 +20,7 @@ __all__ = [
     "END",
     "LENS_BEGIN",
     "LENS_END",
+    "REPOSITORY",
     "RESULTS_FOLDER",
     "SHARING_BEGIN",
     "SHARING_END",
@@ -46,6 +47,9 @@ BLIND_BEGIN, BLIND_END = section_markers("bench_blind.py")
 CLUSTER_BEGIN, CLUSTER_END = section_markers("bench_cluster.py")
 LENS_BEGIN, LENS_END = section_markers("bench_lens.py")
 SHARING_BEGIN, SHARING_END = section_markers("bench_sharing.py")
+
+REPOSITORY = Path(__file__).resolve().parents[2]
+"""The repository's folder, holding BENCHMARKS.md."""
 
 RESULTS_FOLDER = "bench-results"
 """Folder of the repository (beside BENCHMARKS.md) that keeps the published plot and JSON."""
@@ -83,16 +87,15 @@ def publish_section(
     benchmarks.write_text(splice(benchmarks.read_text(), section, begin, end))
 
 
-def keep_report(
-    out: Path, name: str, document: dict, section: str, markers: tuple[str, str], root: Path | None
-) -> None:
-    """Write ``out/NAME.json`` and ``out/NAME.md``, print the section, and publish both into
-    ``root`` (None: not published) between the section's ``markers``."""
+def keep_report(out: Path, name: str, document: dict, section: str, publish: bool) -> None:
+    """Write ``out/NAME.json`` and ``out/NAME.md``, print the section and, with ``publish``,
+    publish both into the repository between ``tools/bench_NAME.py``'s markers."""
     (out / f"{name}.json").write_text(json.dumps(document, indent=1) + "\n")
     (out / f"{name}.md").write_text(section + "\n")
     print(section)
-    if root is not None:
-        publish_section(root, f"{name}.json", document, section, *markers)
+    if publish:
+        markers = section_markers(f"bench_{name}.py")
+        publish_section(REPOSITORY, f"{name}.json", document, section, *markers)
 
 
 def publish(report: BenchReport, out: Path, document: Path) -> Path:
