@@ -67,7 +67,7 @@ def test_calibration_and_poses_are_the_same_without_the_emulators_facts(twins):
 
 
 def test_the_resolved_fit_and_its_first_losses_are_the_same(twins):
-    config = FitConfig(steps=3, seed=5, threads=1, warm_steps=20)
+    config = FitConfig.of(steps=3, seed=5, threads=1, warm_steps=20)
     losses, settings = [], []
     for folder in twins:
         data = load_training_data(folder, 4)
@@ -94,7 +94,7 @@ def _channels(path):
 def camera_run(twins):
     """A short fit of the session as a real camera leaves it (no truth)."""
     _, camera = twins
-    return fit_session(camera, FitConfig(steps=2, warm_steps=10), log=lambda line: None)
+    return fit_session(camera, FitConfig.of(steps=2, warm_steps=10), log=lambda line: None)
 
 
 def test_a_mono_session_without_truth_renders_mono_everywhere(camera_run):
@@ -171,7 +171,7 @@ def test_a_saved_run_renders_and_scores_in_a_new_process_as_the_fit_did(twins):
     # run (differences of 1e-6), which would hide nothing the saved state itself changes.
     result = fit_session(
         emulated,
-        FitConfig(steps=3, warm_steps=10, threads=1),
+        FitConfig.of(steps=3, warm_steps=10, threads=1),
         run_name="saved",
         log=lambda line: None,
     )

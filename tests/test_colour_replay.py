@@ -52,7 +52,7 @@ def test_a_demosaiced_colour_recording_fits_in_colour(tmp_path):
         session.write_poses(4, original.poses(4))  # the same frames: the same poses
     shutil.copytree(recorded / "colmap", replayed / "colmap")
     prepare_session(replayed, 4, log=lambda line: None)  # calibrates; poses are kept
-    result = fit_session(replayed, FitConfig(steps=3, warm_steps=10), log=lambda line: None)
+    result = fit_session(replayed, FitConfig.of(steps=3, warm_steps=10), log=lambda line: None)
     assert result.summary.steps == 3 and result.summary.skipped_steps == 0
     pngs = sorted((result.run_dir / "renders").rglob("*.png"))
     assert pngs and all(cv2.imread(str(p), cv2.IMREAD_UNCHANGED).ndim == 3 for p in pngs)

@@ -203,5 +203,5 @@ def test_no_code_branches_on_a_variant_name_outside_the_registry():
         and (lines := _variant_name_comparisons(ast.parse(path.read_text()), set(VARIANTS)))
     }
     assert found == {}, "variants carry objects for what they do; compare those, not names"
-    planted = ast.parse('if config.variant == "oracle":\n    pass\n')
+    planted = ast.parse('if config.model.variant == "oracle":\n    pass\n')
     assert _variant_name_comparisons(planted, set(VARIANTS)) == [1]

@@ -83,7 +83,7 @@ def test_what_could_not_be_measured_is_assumed_and_said(view_by_view):
 
 def test_the_default_fit_completes_and_renders(view_by_view):
     folder, _ = view_by_view
-    result = fit_session(folder, FitConfig(steps=3, warm_steps=10), log=lambda line: None)
+    result = fit_session(folder, FitConfig.of(steps=3, warm_steps=10), log=lambda line: None)
     assert (result.run_dir / "renders" / "hdr").is_dir()
     assert result.summary.steps == 3 and result.summary.skipped_steps == 0
     assert "hdr" in result.metrics  # scored against the emulator's truth

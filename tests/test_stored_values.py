@@ -38,22 +38,44 @@ def test_a_bad_value_in_a_saved_config_is_a_usage_error_naming_it(tmp_path, fiel
     path = tmp_path / "config.json"
     save_config(FitConfig(), path)
     payload = json.loads(path.read_text())
-    payload["config"][field] = value
+    (group,) = (group for group in payload["config"].values() if field in group)
+    group[field] = value
     path.write_text(json.dumps(payload))
     with pytest.raises(OptionError, match=message) as refused:
         load_config(path)
     assert refused.value.exit_status == 2 and str(path) in str(refused.value)
 
 
+def test_a_flat_config_of_an_older_run_reads_back_its_not_given_values_as_none(tmp_path):
+    path = tmp_path / "config.json"
+    flat = {"preset": "balanced", "steps": 0, "warm_steps": -1, "threshold": 0.0}
+    flat |= {"event_weight": 0.002, "bins": 0, "threads": 3, "exposures_s": [0.01, 0.1]}
+    path.write_text(json.dumps({"config": flat, "bins": 4}))
+    config = load_config(path)
+    assert config.model == dataclasses.replace(config.model, preset="balanced", event_weight=0.002)
+    assert (config.schedule.steps, config.schedule.warm_steps, config.schedule.threads) == (
+        None,
+        None,
+        3,
+    )
+    assert (config.sensor.threshold, config.data.bins) == (None, None)
+    assert config.output.exposures_s == (0.01, 0.1)
+    assert config.replaced(preset="fast") == FitConfig.of(
+        event_weight=0.002, threads=3, exposures_s=(0.01, 0.1)
+    )
+
+
 @settings(max_examples=300, deadline=None, derandomize=True)
 @given(st.sampled_from(sorted(FIELD_BOUNDS)), HOSTILE)
 def test_any_value_of_a_config_field_is_taken_or_refused_by_name(field, value):
     try:
-        config = FitConfig(**{field: value}).validate()
+        config = FitConfig.of(**{field: value}).validate()
     except ConfigError as error:
         assert "--" + field.removesuffix("_s").replace("_", "-") in str(error)
     else:
-        assert FIELD_BOUNDS[field].holds(getattr(config, field))
+        taken = config.options()[field]
+        left_open = taken is None and FitConfig().options()[field] is None
+        assert left_open or FIELD_BOUNDS[field].holds(taken)
 
 
 @pytest.fixture

@@ -42,14 +42,14 @@ def machine() -> str:
     )
 
 
-SPEED_BATCH_PIXELS = {"fast": 0, "balanced": 0, "paper": 32}
-"""Blurry pixels per step of each preset in the speed table: the CPU presets' own batch (0),
+SPEED_BATCH_PIXELS = {"fast": None, "balanced": None, "paper": 32}
+"""Blurry pixels per step of each preset in the speed table: the CPU presets' own batch (None),
 a smaller one for the paper preset, whose MLP at its published 1,024 holds over 13 GB here."""
 
 
 def speed_trainer(data, preset: str) -> Trainer:
     """A trainer of ``preset`` without CRF warm start or held-out pixels, for timing steps."""
-    config = FitConfig(
+    config = FitConfig.of(
         preset=preset,
         steps=1,
         batch_pixels=SPEED_BATCH_PIXELS[preset],
@@ -140,7 +140,7 @@ def quality(
     data = load_training_data(session_dir, b)
     results = {"pose_source": pose_source, "poses_s": poses_s}
     for variant in variants:
-        config = FitConfig(preset=preset, variant=variant, time_budget_s=budget, steps=100_000)
+        config = FitConfig.of(preset=preset, variant=variant, time_budget_s=budget, steps=100_000)
         run = fit_data(
             data,
             config,

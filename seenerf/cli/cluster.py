@@ -183,10 +183,10 @@ def fit_on_ray(
 ) -> list[SessionFit]:
     """Fit each session as a Ray task; return their fits in the order given.
 
-    Each task declares ``config.threads`` CPUs (1 when 0) and one GPU with ``device='cuda'``,
-    and is started again up to :data:`RETRIES` times when its worker dies. A session that fails
-    is returned with its error and does not stop the others. Ctrl-C cancels every task (each
-    saves its checkpoint) before it propagates.
+    Each task declares ``config.schedule.threads`` CPUs (1 when not given) and one GPU with
+    ``device='cuda'``, and is started again up to :data:`RETRIES` times when its worker dies. A
+    session that fails is returned with its error and does not stop the others. Ctrl-C cancels
+    every task (each saves its checkpoint) before it propagates.
 
     Args:
         sessions: session folders every node sees at the same absolute paths.
@@ -201,12 +201,12 @@ def fit_on_ray(
     if fresh:  # here, not in the task: a retried task must resume, not start over again
         for session in absolute:
             start_over(run_folder(session, config, run_name))
-    config = replace(config, threads=config.threads or 1)
+    config = config.replaced(threads=config.schedule.threads or 1)
     with ray_connection(address) as ray:
         progress = ray.remote(num_cpus=0)(_Progress).remote()
         task = ray.remote(_fit_task).options(
-            num_cpus=config.threads,
-            num_gpus=1 if config.device == "cuda" else 0,
+            num_cpus=config.schedule.threads,
+            num_gpus=1 if config.schedule.device == "cuda" else 0,
             max_retries=RETRIES,
             retry_exceptions=False,
         )

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
+import inspect
 import sys
 from pathlib import Path
 
@@ -11,9 +11,9 @@ from davis_io.session import seconds_argument
 from seenerf.cli.options import add_dataclass_options, dataclass_values
 from seenerf.cli.progress import TrainingBar
 from seenerf.errors import OptionError
-from seenerf.model.config import FIELD_BOUNDS, FitConfig
+from seenerf.model.config import FIELD_BOUNDS, GROUPS, FitConfig
 
-__all__ = ["FLAGS", "HELP", "add_arguments", "run"]
+__all__ = ["FLAGS", "HELP", "add_arguments", "config_from_options", "run"]
 
 HELP = (
     "fit See-NeRF to a session (sensor calibration and poses if missing): sharp HDR renders, "
@@ -29,7 +29,10 @@ FLAGS = {
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the verb's arguments: session and run, then one option per :class:`FitConfig` field."""
+    """Add the verb's arguments: session and run, then an option group per configuration group.
+
+    Each field of a group of :class:`FitConfig` (:data:`GROUPS`) is one option.
+    """
     parser.add_argument(
         "session", type=Path, nargs="+", help="session folder(s): in turn, or at once with --ray"
     )
@@ -61,12 +64,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "estimated with it held fixed, and rays and renders follow it (default: COLMAP "
         "estimates a pinhole)",
     )
-    add_dataclass_options(
-        parser,
-        FitConfig,
-        seconds=seconds_argument("--time-budget", FIELD_BOUNDS["time_budget_s"]),
-        flags=FLAGS,
-        bounds=FIELD_BOUNDS,
+    seconds = seconds_argument("--time-budget", FIELD_BOUNDS["time_budget_s"])
+    for name, group in GROUPS.items():
+        title = inspect.getdoc(group).splitlines()[0]
+        options = parser.add_argument_group(f"{name} options", title)
+        add_dataclass_options(options, group, seconds, flags=FLAGS, bounds=FIELD_BOUNDS)
+
+
+def config_from_options(args: argparse.Namespace) -> FitConfig:
+    """The configuration the parsed options state (not yet validated)."""
+    return FitConfig(
+        **{name: group(**dataclass_values(group, args)) for name, group in GROUPS.items()}
     )
 
 
@@ -77,14 +85,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.run is not None:
         plain_name(args.run, "--run")
-    values = dataclass_values(FitConfig, args)
+    config = config_from_options(args)
     if args.config is not None:
         # The saved run's configuration, with the options given beside it on top.
-        defaults = dataclass_values(FitConfig, argparse.Namespace(**_defaults()))
-        given = {name: value for name, value in values.items() if value != defaults[name]}
-        config = dataclasses.replace(load_config(args.config), **given).validate()
-    else:
-        config = FitConfig(**values).validate()
+        defaults = FitConfig().options()
+        given = {name: value for name, value in config.options().items() if value != defaults[name]}
+        config = load_config(args.config).replaced(**given)
+    config = config.validate()
     if args.ray is not None and args.camera_calibration is not None:
         raise OptionError(
             "--camera-calibration with --ray: estimate each session's poses first with "
@@ -97,13 +104,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         fits = _fit_on_ray(config, args)
     return _report(fits)
-
-
-def _defaults() -> dict:
-    """Every fit option's default, as the parser gives it."""
-    parser = argparse.ArgumentParser()
-    add_arguments(parser)
-    return vars(parser.parse_args(["session"]))
 
 
 def _fit_here(session: Path, config: FitConfig, args: argparse.Namespace) -> int:

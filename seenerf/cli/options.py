@@ -3,7 +3,8 @@
 A field ``name`` becomes ``--name`` (underscores as dashes) of the field's type and default, its
 help the field's entry in the class docstring's ``Attributes:`` section. A field in seconds
 (``*_s``) drops the suffix: a number takes a duration (``10m``), a tuple takes several seconds.
-A boolean that defaults to True becomes ``--no-name``, which turns it off.
+A boolean that defaults to True becomes ``--no-name``, which turns it off. A field of type
+``X | None`` takes an ``X``; left out, it stays None.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import argparse
 import dataclasses
 import inspect
 import re
+import types
 import typing
 from collections.abc import Callable
 
@@ -68,6 +70,13 @@ def _default(field: dataclasses.Field):
     return field.default
 
 
+def _given_type(kind):
+    """The type a value given on the command line has: ``X`` for ``X | None``."""
+    if typing.get_origin(kind) in (typing.Union, types.UnionType):
+        (kind,) = (arg for arg in typing.get_args(kind) if arg is not type(None))
+    return kind
+
+
 def _option(
     field: dataclasses.Field, kind, seconds: Callable[[str], float], bounds: Bounds | None
 ) -> tuple[str, dict]:
@@ -92,7 +101,7 @@ def _option(
 
 
 def add_dataclass_options(
-    parser: argparse.ArgumentParser,
+    parser: argparse.ArgumentParser | argparse._ArgumentGroup,
     cls: type,
     seconds: Callable[[str], float],
     flags: dict[str, str] | None = None,
@@ -101,7 +110,7 @@ def add_dataclass_options(
     """Add one option per field of the dataclass ``cls``, its default the field's.
 
     Args:
-        parser: the parser to add to.
+        parser: the parser, or one of its argument groups, to add to.
         cls: a dataclass whose docstring documents its fields under ``Attributes:``.
         seconds: parses a duration given on the command line into seconds.
         flags: option strings to use instead of the derived ones, by field name.
@@ -110,7 +119,8 @@ def add_dataclass_options(
     docs = attribute_docs(cls.__doc__)
     hints = typing.get_type_hints(cls)
     for field in dataclasses.fields(cls):
-        flag, keywords = _option(field, hints[field.name], seconds, (bounds or {}).get(field.name))
+        kind = _given_type(hints[field.name])
+        flag, keywords = _option(field, kind, seconds, (bounds or {}).get(field.name))
         default = _default(field)
         text = plain_text(docs.get(field.name, "")).replace("%", "%%").rstrip(".")
         if keywords.get("action") == "store_false":

@@ -51,15 +51,16 @@ def prepare_and_fit(
     estimated again.
     """
     book = LogBook(log)  # the calibration's and poses' lines go into the run's log.txt too
-    threads, why = choose_threads(config.threads)
+    threads, why = choose_threads(config.schedule.threads)
     limit_threads(threads)
     book(why)
     bins = session_bins(session_dir, config)
-    if config.time_budget_s > 0:
+    budget_s = config.schedule.time_budget_s
+    if budget_s is not None:
         plan = estimate_preparation(session_dir, bins)
         book(
-            f"budget {config.time_budget_s:.0f} s: {plan.summary()}, then training and the final "
-            f"renders in the {max(config.time_budget_s - plan.total_s, 0):.0f} s left"
+            f"budget {budget_s:.0f} s: {plan.summary()}, then training and the final renders in "
+            f"the {max(budget_s - plan.total_s, 0):.0f} s left"
         )
     spent_s = prepare_session(session_dir, bins, book, camera_calibration, threads=threads)
     return fit_session(

@@ -15,7 +15,9 @@ from seenerf.errors import TrainingDataError
 __all__ = ["load_training_data"]
 
 
-def _calibration(session: Session, sensor_from_truth: bool, threshold: float) -> SensorCalibration:
+def _calibration(
+    session: Session, sensor_from_truth: bool, threshold: float | None
+) -> SensorCalibration:
     """The sensor values a fit uses: measured (or the truth's), a stated threshold over both."""
     if sensor_from_truth:
         truth = session.truth()
@@ -31,7 +33,7 @@ def _calibration(session: Session, sensor_from_truth: bool, threshold: float) ->
                 f"{session.folder}: the sensor is not calibrated yet; run `seecap calibrate "
                 f"{session.folder}` (seecap fit runs it when missing)"
             )
-    return calibration.with_threshold(threshold) if threshold > 0 else calibration
+    return calibration if threshold is None else calibration.with_threshold(threshold)
 
 
 def _poses_at(poses: SessionPoses, stored_times: np.ndarray, times: np.ndarray) -> np.ndarray:
@@ -51,7 +53,7 @@ def load_training_data(
     b: int,
     *,
     sensor_from_truth: bool = False,
-    threshold: float = 0.0,
+    threshold: float | None = None,
     keep_lost: bool = False,
 ) -> TrainingData:
     """Frames, event bins and poses of a session as float32 training arrays.
@@ -65,7 +67,7 @@ def load_training_data(
         b: event bins per exposure.
         sensor_from_truth: use the emulated sensor's true values instead of the measured ones
             (the white-box fit).
-        threshold: a contrast threshold stated for ON, OFF and every pixel (0: calibrated).
+        threshold: a contrast threshold stated for ON, OFF and every pixel (None: calibrated).
         keep_lost: also train on frames whose exposure window lost events.
 
     Raises:

@@ -18,8 +18,8 @@ __all__ = ["bracket_exposures", "render_outputs"]
 
 def bracket_exposures(config: FitConfig, data: TrainingData) -> tuple[float, ...]:
     """The LDR exposures a run renders: the configured ones, else the truth's, else the paper's."""
-    if config.exposures_s:
-        return tuple(config.exposures_s)
+    if config.output.exposures_s:
+        return tuple(config.output.exposures_s)
     if data.test is not None:
         return tuple(float(exposure) for exposure in data.test.exposures_s)
     return PAPER_EXPOSURES_S
@@ -53,16 +53,16 @@ def render_outputs(
         data.intrinsics,
         data.image_size,
         {
-            "seecap_variant": config.variant,
-            "seecap_preset": config.preset,
+            "seecap_variant": config.model.variant,
+            "seecap_preset": config.model.preset,
             "seecap_units": "linear radiance, scale of the learned CRF anchor",
         },
         distortion=data.distortion,
     )
     plot_crf(model, data, views, run_dir / "crf.png")
     metrics = {
-        "variant": config.variant,
-        "preset": config.preset,
+        "variant": config.model.variant,
+        "preset": config.model.preset,
         "similarity_scale": similarity.scale,
         "render_s_per_view": views.render_s,
     }
@@ -71,7 +71,7 @@ def render_outputs(
     metrics.update(score_views(views, data))
     metrics["crf_error"] = crf_error(model, data, views)
     metrics["test_poses"] = {"mapped_by": "similarity of the training cameras", "registered": False}
-    if config.register_test_views and similarity is not IDENTITY:
+    if config.output.register_test_views and similarity is not IDENTITY:
         refined, registration = register_test_poses(model, data, poses)
         registered = score_views(
             render_views(

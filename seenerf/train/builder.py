@@ -49,7 +49,7 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
     """The variant's RGB response for this session.
 
     The truth's table for the oracle; for the learned response, the linear one instead when
-    the calibration measured linear frames (a raw DAVIS frame) and ``config.response`` is
+    the calibration measured linear frames (a raw DAVIS frame) and ``config.sensor.response`` is
     ``auto``; else the variant's class with the anchor.
 
     A linear response whose measured levels cannot hold the anchor falls back to the learned
@@ -65,17 +65,17 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
             raise ConfigError("the true response is unknown: this session's truth has no crf/")
         return TabulatedCrf(data.truth.crf_log_exposure, data.truth.crf_value)
     anchor = {
-        "anchor_log_exposure": config.anchor_log_exposure,
-        "anchor_value": config.anchor_value,
+        "anchor_log_exposure": config.sensor.anchor_log_exposure,
+        "anchor_value": config.sensor.anchor_value,
     }
-    if crf is RgbCrf and config.response == "auto" and data.linear_levels is not None:
-        if LinearCrf.fits(*data.linear_levels, config.anchor_value):
+    if crf is RgbCrf and config.sensor.response == "auto" and data.linear_levels is not None:
+        if LinearCrf.fits(*data.linear_levels, config.sensor.anchor_value):
             return LinearCrf(*data.linear_levels, **anchor)
         black, saturation = data.linear_levels
         warnings.warn(
             f"the frames were measured linear, but their black level {black:.3f} and clip level "
-            f"{saturation:.3f} leave no room for the anchor value {config.anchor_value}: the "
-            "response is learned instead",
+            f"{saturation:.3f} leave no room for the anchor value "
+            f"{config.sensor.anchor_value}: the response is learned instead",
             stacklevel=2,
         )
     return crf(**anchor)
@@ -83,10 +83,10 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
 
 def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[SeeNerfModel, Preset]:
     """The model and the preset resized for this scene (field resolution from extent and sensor)."""
-    variant = get_variant(config.variant)
+    variant = get_variant(config.model.variant)
     method = method_class(variant)
     poses, bounds = method.training_frame(data, config)
-    preset = get_preset(config.preset)
+    preset = get_preset(config.model.preset)
     space = (
         forward_facing_space(poses, data.intrinsics, bounds, data.image_size)
         if preset.space == "auto"
@@ -121,7 +121,7 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
         )
     spec = variant.events
     if spec is not None and spec.delay == "mlp":
-        spec = dataclasses.replace(spec, **LOW_PASS_READINGS[config.low_pass])
+        spec = dataclasses.replace(spec, **LOW_PASS_READINGS[config.sensor.low_pass])
     model = SeeNerfModel(
         renderer,
         variant,
@@ -132,12 +132,12 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
         crf=rgb_response(variant.crf, data, config),
         event_args={
             "threshold": data.threshold,
-            "cutoff_hz": data.cutoff_hz or config.cutoff_hz,
-            "dead_time_s": data.dead_time_s if config.dead_time else 0.0,
+            "cutoff_hz": data.cutoff_hz or config.sensor.cutoff_hz,
+            "dead_time_s": data.dead_time_s if config.sensor.dead_time else 0.0,
             "polarity_scale": data.polarity_scale,
         },
         pose_correction=PoseCorrection(data.num_frames)
-        if config.refine_poses and method.refines_poses
+        if config.model.refine_poses and method.refines_poses
         else None,
         in_truth_frame=method.in_truth_frame,
     )

@@ -51,8 +51,8 @@ class FitResult:
 
 def session_bins(session_dir: Path | str, config: FitConfig) -> int:
     """B from the config, else the session manifest, else :data:`DEFAULT_BINS`."""
-    if config.bins:
-        return config.bins
+    if config.data.bins is not None:
+        return config.data.bins
     with Session.open(session_dir) as session:
         return int(getattr(session.manifest, "b", 0) or DEFAULT_BINS)
 
@@ -64,7 +64,7 @@ def run_folder(session_dir: Path | str, config: FitConfig, run_name: str | None)
         UsageError: ``run_name`` is not a plain folder name (a separator, ``..``, absolute).
     """
     name = plain_name(run_name, "--run") if run_name is not None else None
-    return Path(session_dir) / "fit" / (name or f"{config.preset}-{config.variant}")
+    return Path(session_dir) / "fit" / (name or f"{config.model.preset}-{config.model.variant}")
 
 
 def start_over(run_dir: Path) -> None:
@@ -108,14 +108,14 @@ def fit_session(
     config = config.validate()
     session_dir = Path(session_dir)
     start = time.perf_counter()
-    variant = get_variant(config.variant)
+    variant = get_variant(config.model.variant)
     run_dir = run_folder(session_dir, config, run_name)
     with writer_lock(session_dir, f"fitting {run_dir.name}", shared=True):
         data = load_training_data(
             session_dir,
             session_bins(session_dir, config),
             sensor_from_truth=variant.sensor_from_truth,
-            threshold=config.threshold,
+            threshold=config.sensor.threshold,
         )
         spent_s += time.perf_counter() - start
         return fit_data(
@@ -170,7 +170,7 @@ def resolved_settings(trainer: Trainer) -> dict:
         "space": "ndc" if renderer.space is not None else "world",
         "event_weight": trainer.preset.event_weight,
         "event_threshold": trainer.data.threshold,
-        "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.cutoff_hz,
+        "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.sensor.cutoff_hz,
         "event_dead_time_s": trainer.model.event_crf.dead_time_s
         if trainer.model.event_crf is not None
         else 0.0,
@@ -204,14 +204,14 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     trainer = Trainer(data, config, run_dir, log, spent_s, on_step)
     threads = torch.get_num_threads() if trainer.device == "cpu" else 0
     log(
-        f"training {config.preset} {config.variant} on {trainer.device}"
+        f"training {config.model.preset} {config.model.variant} on {trainer.device}"
         + (f" ({threads} threads)" if threads else "")
         + f", {data.num_frames} frames, b = {data.num_bins}"
     )
     travel_px = median_travel_px(data)
     log(
         f"image motion between latent poses: median {travel_px:.1f} px at the mean depth; "
-        f"{config.subframes} pose(s) per bin in the blur integral"
+        f"{config.model.subframes} pose(s) per bin in the blur integral"
     )
     if isinstance(trainer.model.crf, LinearCrf):
         crf = trainer.model.crf

@@ -85,19 +85,24 @@ def merged_preset(preset: Preset, config: FitConfig) -> Preset:
     """The preset with the values the configuration states instead of its own."""
     return dataclasses.replace(
         preset,
-        pixels_per_step=config.batch_pixels or preset.pixels_per_step,
-        warm_steps=preset.warm_steps if config.warm_steps < 0 else config.warm_steps,
-        event_weight=config.event_weight or preset.event_weight,
+        pixels_per_step=_given(config.data.batch_pixels, preset.pixels_per_step),
+        warm_steps=_given(config.schedule.warm_steps, preset.warm_steps),
+        event_weight=_given(config.model.event_weight, preset.event_weight),
     )
+
+
+def _given(stated, preset_value):
+    """The stated value, or the preset's where none is stated (None)."""
+    return preset_value if stated is None else stated
 
 
 def frame_scale(data: TrainingData, config: FitConfig) -> Callable[[torch.Tensor], torch.Tensor]:
     """The scale frame values are compared on.
 
     Noise-even (:func:`~seenerf.train.losses.noise_even`) for linear frames whose noise was
-    measured, unless ``config.frame_noise`` is off; else the values themselves.
+    measured, unless ``config.sensor.frame_noise`` is off; else the values themselves.
     """
-    if not config.frame_noise or data.linear_levels is None or data.noise_offset <= 0:
+    if not config.sensor.frame_noise or data.linear_levels is None or data.noise_offset <= 0:
         return lambda values: values
     black, offset = data.linear_levels[0], data.noise_offset
     return lambda values: noise_even(values, black, offset)
@@ -139,9 +144,9 @@ class Method:
         device: str,
     ):
         self.model, self.data, self.config, self.preset = model, data, config, preset
-        rng = np.random.default_rng(config.seed)
+        rng = np.random.default_rng(config.schedule.seed)
         pixels = data.image_size[0] * data.image_size[1]
-        count = int(round(config.validation_share * data.num_frames * pixels))
+        count = int(round(config.data.validation_share * data.num_frames * pixels))
         chosen = rng.choice(data.num_frames * pixels, count, False)
         self.validation = torch.as_tensor(np.sort(chosen))
 
@@ -175,10 +180,10 @@ class RecordingMethod(Method):
         Raises:
             ConfigError: the variant needs frames of several exposures and the session has one.
         """
-        if get_variant(config.variant).several_exposures:
+        if get_variant(config.model.variant).several_exposures:
             if len(np.unique(data.exposure_s)) < 2:
                 raise ConfigError(
-                    f"variant {config.variant} needs frames of at least two exposures; this "
+                    f"variant {config.model.variant} needs frames of at least two exposures; this "
                     f"session has one ({float(data.exposure_s[0]):g} s): record with several "
                     "exposures"
                 )
@@ -190,12 +195,12 @@ class RecordingMethod(Method):
         self.frames = FrameSampler(
             data,
             np.arange(data.num_frames),
-            config.event_share,
+            config.data.event_share,
             events is None or events.calibrated,
             self.validation.numpy(),
             device,
-            config.subframes,
-            config.dead_time,
+            config.model.subframes,
+            config.sensor.dead_time,
             model.pose_correction,
         )
         self.scale = frame_scale(data, config)
@@ -220,7 +225,7 @@ class RecordingMethod(Method):
         terms = [
             LossTerm("ldr", 1.0, ldr),
             LossTerm("events", self.preset.event_weight, events),
-            LossTerm("anchor", self.config.anchor_weight, anchor),
+            LossTerm("anchor", self.config.sensor.anchor_weight, anchor),
             *self._smoothness(),
         ]
         if model.pose_correction is not None:
@@ -261,7 +266,8 @@ class SharpTruthMethod(Method):
         """
         if data.truth is None:
             raise ConfigError(
-                f"variant {config.variant} needs ground truth (an emulated session with truth/)"
+                f"variant {config.model.variant} needs ground truth (an emulated session with "
+                "truth/)"
             )
         scale = truth_to_fit_frame(data).scale
         return data.truth.c2w, (np.asarray(data.bounds, np.float64) / scale).astype(np.float32)

@@ -50,14 +50,14 @@ def open_run(run_dir: Path | str) -> OpenRun:
             "run seecap fit first"
         )
     config = load_config(run_dir / "config.json")
-    bins = json.loads((run_dir / "config.json").read_text()).get("bins", config.bins)
+    bins = json.loads((run_dir / "config.json").read_text()).get("bins", config.data.bins)
     data = load_training_data(
         run_dir.parent.parent,
         int(bins),
-        sensor_from_truth=get_variant(config.variant).sensor_from_truth,
-        threshold=config.threshold,
+        sensor_from_truth=get_variant(config.model.variant).sensor_from_truth,
+        threshold=config.sensor.threshold,
     )
-    model, _ = build_model(data, config, resolve_device(config.device))
+    model, _ = build_model(data, config, resolve_device(config.schedule.device))
     load_model_state(run_dir / "checkpoint.pt", model)
     return OpenRun(run_dir, model, with_refined_poses(data, model), config)
 
@@ -152,7 +152,7 @@ def render_run(
         out_dir,
         run.data.intrinsics,
         run.data.image_size,
-        {"seecap_variant": run.config.variant, "seecap_path": str(path or "held-out views")},
+        {"seecap_variant": run.config.model.variant, "seecap_path": str(path or "held-out views")},
         distortion=distortion,
     )
     if video is not None:

@@ -28,9 +28,9 @@ LOOK_S = 0.3
 """How long the machine is watched to see how busy its cores are."""
 
 
-def limit_threads(count: int) -> None:
-    """Use at most ``count`` threads in each pool for the rest of the process (0: the defaults)."""
-    if count <= 0:
+def limit_threads(count: int | None) -> None:
+    """Use at most ``count`` threads in each pool for the rest of the process (None: as is)."""
+    if count is None:
         return
     torch.set_num_threads(count)
     threadpool_limits(limits=count)
@@ -99,14 +99,14 @@ def busy_cores(look_s: float = LOOK_S, stat: Path = Path("/proc/stat")) -> float
     return watch.others()
 
 
-def choose_threads(requested: int) -> tuple[int, str]:
+def choose_threads(requested: int | None) -> tuple[int, str]:
     """The thread count of a fit and a line saying why.
 
-    ``requested`` > 0 is taken as given; 0 uses the cores this process may run on that other
-    work leaves free.
+    A count ``requested`` is taken as given; None uses the cores this process may run on that
+    other work leaves free.
     """
     cores = len(os.sched_getaffinity(0))
-    if requested > 0:
+    if requested is not None:
         return requested, f"threads: {requested} (as asked) on {cores} cores"
     busy = busy_cores()
     if busy is None:

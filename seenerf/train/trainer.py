@@ -116,19 +116,22 @@ class Trainer:
     ):
         self.data, self.config, self.run_dir, self.log = data, config.validate(), run_dir, log
         self.on_step = on_step
-        limit_threads(config.threads)
-        self.device = resolve_device(config.device)
-        torch.manual_seed(config.seed)
+        limit_threads(config.schedule.threads)
+        self.device = resolve_device(config.schedule.device)
+        torch.manual_seed(config.schedule.seed)
         self.model, preset = build_model(data, config, self.device)
         self.preset = merged_preset(preset, config)
-        self.generator = torch.Generator().manual_seed(config.seed)
+        self.generator = torch.Generator().manual_seed(config.schedule.seed)
         # A budget alone runs until it is spent or the held-out score stops rising (a plateau),
         # not to the preset's step count: that count only sets how far the rate falls.
-        budgeted = config.time_budget_s > 0
-        self.total_steps = config.steps or (math.inf if budgeted else self.preset.steps)
+        if config.schedule.steps is not None:
+            self.total_steps = config.schedule.steps
+        else:
+            budgeted = config.schedule.time_budget_s is not None
+            self.total_steps = math.inf if budgeted else self.preset.steps
         self.spent_s = spent_s
         self.method = make_method(self.model, data, config, self.preset, self.device)
-        automatic = config.threads == 0 and self.device == "cpu"
+        automatic = config.schedule.threads is None and self.device == "cpu"
         self.core_watch = CoreWatch() if automatic else None
         self.cores_looked_at = time.perf_counter()
         field_params = list(self.model.renderer.parameters())
@@ -162,7 +165,7 @@ class Trainer:
         """
         resumed = self._resume()
         if not resumed:
-            self.model.warm_start(self.preset.warm_steps, self.config.seed)
+            self.model.warm_start(self.preset.warm_steps, self.config.schedule.seed)
         with stop_requests() as stop:
             return self._train(stop)
 
@@ -241,9 +244,9 @@ class Trainer:
         What the caller spent (calibration, poses) and what the final renders and scores will
         take (:attr:`outputs_s`) are not the training's.
         """
-        if self.config.time_budget_s <= 0:
+        if self.config.schedule.time_budget_s is None:
             return math.inf
-        return self.config.time_budget_s - self.spent_s - self.outputs_s
+        return self.config.schedule.time_budget_s - self.spent_s - self.outputs_s
 
     def _estimate_outputs(self, validation_s: float) -> None:
         """What the renders and scores after training will take, from the validation's speed.
@@ -251,7 +254,7 @@ class Trainer:
         Each held-out view is rendered, registered against its image and rendered again
         (:data:`OUTPUT_RENDERS_PER_VIEW` renders' worth), plus :data:`OUTPUT_FIXED_S`.
         """
-        rays = len(self.method.validation) * (self.data.num_bins * self.config.subframes + 1)
+        rays = len(self.method.validation) * (self.data.num_bins * self.config.model.subframes + 1)
         if rays == 0 or validation_s <= 0:
             return
         height, width = self.data.image_size
@@ -259,9 +262,10 @@ class Trainer:
         render_s = height * width * validation_s / rays
         first = self.outputs_s == 0.0
         self.outputs_s = views * OUTPUT_RENDERS_PER_VIEW * render_s + OUTPUT_FIXED_S
-        if first and self.config.time_budget_s > 0:
+        budget_s = self.config.schedule.time_budget_s
+        if first and budget_s is not None:
             self.log(
-                f"keeping {self.outputs_s:.0f} s of the {self.config.time_budget_s:.0f} s budget "
+                f"keeping {self.outputs_s:.0f} s of the {budget_s:.0f} s budget "
                 f"for the final renders and scores of {views} views ({self.spent_s:.0f} s went "
                 "to calibration and poses)"
             )

@@ -6,7 +6,6 @@ import re
 import signal
 import threading
 import time
-from dataclasses import replace
 from datetime import datetime
 
 import torch
@@ -15,7 +14,7 @@ from seenerf.cli.cluster import fit_on_ray
 from seenerf.cli.sessions import fit_kept_apart
 from seenerf.model.config import FitConfig
 
-FIT = FitConfig(
+FIT = FitConfig.of(
     steps=120, batch_pixels=64, warm_steps=2, threads=1, register_test_views=False, seed=3
 )
 RUN = "fast-full"
@@ -85,7 +84,7 @@ def test_a_fit_whose_worker_dies_is_retried_and_resumes_from_its_checkpoint(loca
     killed = []
     killer = threading.Thread(target=_kill_the_fit_at_its_first_checkpoint, args=(run_dir, killed))
     killer.start()
-    (fit,) = fit_on_ray([session], replace(FIT, steps=500), address="local")
+    (fit,) = fit_on_ray([session], FIT.replaced(steps=500), address="local")
     killer.join()
     assert killed and killed[0] != os.getpid()
     assert fit.error == ""

@@ -30,7 +30,7 @@ def trajectory(options: dict) -> list[dict]:
     torch.set_num_threads(1)
     scene = plane_scene(height=12, width=16, frames=3, b=2, test_views=1)
     common = {"steps": 12, "batch_pixels": 16, "warm_steps": 3, "validation_share": 0.05}
-    config = FitConfig(**common, threads=1, **options)
+    config = FitConfig.of(**common, threads=1, **options)
     terms = []
 
     def keep(trainer: Trainer) -> None:

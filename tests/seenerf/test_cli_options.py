@@ -90,7 +90,7 @@ def _fit_parser() -> argparse.ArgumentParser:
 
 def test_fit_verb_defaults_are_fit_config_defaults(tmp_path):
     args = _fit_parser().parse_args([str(tmp_path)])
-    assert FitConfig(**dataclass_values(FitConfig, args)) == FitConfig()
+    assert fit_verb.config_from_options(args) == FitConfig()
     assert (args.session, args.run, args.fresh, args.ray) == ([tmp_path], None, False, None)
 
 
@@ -102,8 +102,8 @@ def test_fit_verb_keeps_its_option_names(tmp_path):
         + ["--no-registration", "--fresh", "--run", "mine", "--exposures", "0.01", "0.02"]
         + ["--no-dead-time"]
     )
-    config = FitConfig(**dataclass_values(FitConfig, args))
-    assert config == FitConfig(
+    config = fit_verb.config_from_options(args)
+    assert config == FitConfig.of(
         preset="paper",
         variant="base",
         time_budget_s=600.0,

@@ -10,7 +10,7 @@ from seenerf.train.trainer import Trainer
 
 
 def _check(scene, **overrides):
-    config = FitConfig(steps=2, batch_pixels=16, warm_steps=0, validation_share=0.0, **overrides)
+    config = FitConfig.of(steps=2, batch_pixels=16, warm_steps=0, validation_share=0.0, **overrides)
     trainer = Trainer(scene, config, log=lambda line: None)
     step = trainer.method.step(trainer.generator)
     loss, terms = step.loss(), step.shown()
@@ -115,7 +115,7 @@ def test_a_fit_whose_every_loss_is_nan_fails_instead_of_reporting_success(monkey
     from seenerf.errors import TrainingDataError
     from seenerf.train.trainer import SKIPPED_IN_A_ROW_LIMIT
 
-    config = FitConfig(steps=200, batch_pixels=16, warm_steps=0, validation_share=0.0)
+    config = FitConfig.of(steps=200, batch_pixels=16, warm_steps=0, validation_share=0.0)
     trainer = Trainer(_scene(), config, log=lambda line: None)
     calls = []
 
@@ -132,7 +132,7 @@ def test_a_fit_whose_every_loss_is_nan_fails_instead_of_reporting_success(monkey
 
 
 def test_isolated_nan_steps_are_skipped_and_counted(monkeypatch):
-    config = FitConfig(steps=30, batch_pixels=16, warm_steps=0, validation_share=0.0)
+    config = FitConfig.of(steps=30, batch_pixels=16, warm_steps=0, validation_share=0.0)
     trainer = Trainer(_scene(), config, log=lambda line: None)
     calls = []
 

@@ -45,7 +45,7 @@ def test_a_correction_turns_and_moves_each_view_in_its_own_camera_frame():
 
 def _config(**overrides):
     values = {"steps": 6, "batch_pixels": 6, "warm_steps": 2, "validation_share": 0.1}
-    return FitConfig(**{**values, "threads": 1, "refine_poses": True, **overrides})
+    return FitConfig.of(**{**values, "threads": 1, "refine_poses": True, **overrides})
 
 
 def test_training_refines_the_poses_and_a_saved_run_keeps_them(tiny_scene, tmp_path):

@@ -37,7 +37,7 @@ def test_verbs_are_registered_and_import_without_torch():
 
 
 def test_fit_writes_every_output(tiny_scene, tmp_path):
-    config = FitConfig(steps=3, batch_pixels=8, warm_steps=2, validation_share=0.1)
+    config = FitConfig.of(steps=3, batch_pixels=8, warm_steps=2, validation_share=0.1)
     result = fit_data(tiny_scene, config, tmp_path / "run", log=lambda line: None)
     run = result.run_dir
     exposures = [f"{e:g}" for e in tiny_scene.test.exposures_s]
@@ -46,7 +46,7 @@ def test_fit_writes_every_output(tiny_scene, tmp_path):
     assert all((run / "renders" / "ldr" / e / "000.png").exists() for e in exposures)
     assert (run / "crf.png").exists() and (run / "checkpoint.pt").exists()
     saved = json.loads((run / "config.json").read_text())
-    assert saved["config"]["steps"] == 3 and saved["field"] == "vector-matrix"
+    assert saved["config"]["schedule"]["steps"] == 3 and saved["field"] == "vector-matrix"
     metrics = json.loads((run / "metrics.json").read_text())
     assert metrics["training"]["steps"] == 3
     assert set(metrics["ldr"]) == set(exposures)
@@ -78,19 +78,20 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
         fit_verb.run(parser.parse_args([str(tmp_path), "--threshold", "0.35"]))
     assert seen["prepared"] == (tmp_path, 4)
     assert seen["spent_s"] == 12.5  # the budget counts the preparation
-    assert seen["config"].threshold == pytest.approx(0.35)
-    assert parser.parse_args([str(tmp_path)]).threshold == 0.0  # 0: measured
+    assert seen["config"].sensor.threshold == pytest.approx(0.35)
+    assert parser.parse_args([str(tmp_path)]).threshold is None  # None: measured
     # A run's saved config.json fits again as it was; options given beside it replace its values.
     from seenerf.model.config import save_config
 
-    save_config(FitConfig(threshold=0.25, seed=7, steps=40), tmp_path / "config.json")
+    save_config(FitConfig.of(threshold=0.25, seed=7, steps=40), tmp_path / "config.json")
     with pytest.raises(SystemExit):
         fit_verb.run(
             parser.parse_args(
                 [str(tmp_path), "--config", str(tmp_path / "config.json"), "--seed", "1"]
             )
         )
-    assert (seen["config"].threshold, seen["config"].seed, seen["config"].steps) == (0.25, 1, 40)
+    config = seen["config"]
+    assert (config.sensor.threshold, config.schedule.seed, config.schedule.steps) == (0.25, 1, 40)
 
 
 def test_a_fits_log_holds_the_preparation_and_its_config_the_software(monkeypatch, tmp_path):
@@ -110,7 +111,7 @@ def test_a_fits_log_holds_the_preparation_and_its_config_the_software(monkeypatc
     monkeypatch.setattr("seenerf.train.fit.session_bins", lambda session, config: 2)
     monkeypatch.setattr("seenerf.train.fit.load_training_data", lambda *a, **k: scene)
     (tmp_path / "session.json").write_text("{}")
-    config = FitConfig(steps=2, batch_pixels=8, warm_steps=2, validation_share=0.1)
+    config = FitConfig.of(steps=2, batch_pixels=8, warm_steps=2, validation_share=0.1)
     shown = []
     result = prepare_and_fit(tmp_path, config, log=shown.append)
     log = (result.run_dir / "log.txt").read_text().splitlines()
@@ -142,14 +143,14 @@ def test_a_fit_with_a_budget_says_what_its_preparation_should_take_first(monkeyp
     monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)
     shown = []
     with pytest.raises(Stop):
-        prepare_and_fit(tmp_path, FitConfig(time_budget_s=600.0, threads=1), log=shown.append)
+        prepare_and_fit(tmp_path, FitConfig.of(time_budget_s=600.0, threads=1), log=shown.append)
     assert shown[1] == (
         "budget 600 s: about 26 s to measure the sensor (24.0 M events) and 74 s for poses "
         "(80 latent frames), then training and the final renders in the 500 s left"
     )
     shown.clear()
     with pytest.raises(Stop):
-        prepare_and_fit(tmp_path, FitConfig(threads=1), log=shown.append)
+        prepare_and_fit(tmp_path, FitConfig.of(threads=1), log=shown.append)
     assert not [line for line in shown if line.startswith("budget")]  # no budget, no plan
 
 

@@ -95,7 +95,7 @@ def test_subframes_below_one_are_refused():
     with pytest.raises(
         ConfigError, match="--subframes 0 is out of range: give a whole number from 1"
     ):
-        FitConfig(subframes=0).validate()
+        FitConfig.of(subframes=0).validate()
 
 
 def test_batches_with_subframes_hold_the_latent_rays_at_every_mth_pose():
@@ -111,7 +111,7 @@ def test_batches_with_subframes_hold_the_latent_rays_at_every_mth_pose():
 
 def test_a_fit_with_subframes_predicts_b_counts_and_trains():
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
-    config = FitConfig(steps=3, batch_pixels=16, warm_steps=0, validation_share=0.0, subframes=2)
+    config = FitConfig.of(steps=3, batch_pixels=16, warm_steps=0, validation_share=0.0, subframes=2)
     trainer = Trainer(scene, config, log=lambda line: None)
     batch = trainer.method.frames.sample(4, torch.Generator().manual_seed(0))
     assert batch.origins.shape[1] == 5

@@ -1,4 +1,5 @@
-"""`--threads N` bounds every CPU pool of the process, not torch's alone; 0 takes the free cores."""
+"""`--threads N` bounds every CPU pool of the process, not torch's alone; none given takes the free
+cores."""
 
 import json
 import subprocess
@@ -13,7 +14,7 @@ import cv2, torch
 from threadpoolctl import threadpool_info
 from seenerf.train.threads import limit_threads
 if sys.argv[1] != "untouched":
-    limit_threads(int(sys.argv[1]))
+    limit_threads(None if sys.argv[1] == "None" else int(sys.argv[1]))
 print(json.dumps({
     "torch": torch.get_num_threads(),
     "blas": [pool["num_threads"] for pool in threadpool_info()],
@@ -22,7 +23,7 @@ print(json.dumps({
 """
 
 
-def _pools(count: int | str) -> dict:
+def _pools(count: int | str | None) -> dict:
     done = subprocess.run(
         [sys.executable, "-c", PROBE, str(count)], capture_output=True, text=True, check=True
     )
@@ -35,8 +36,8 @@ def test_one_thread_means_one_in_torch_blas_and_opencv():
     assert pools["blas"] and set(pools["blas"]) == {1}  # numpy's OpenBLAS is among them
 
 
-def test_zero_leaves_the_defaults():
-    assert _pools(0) == _pools("untouched")
+def test_no_count_leaves_the_defaults():
+    assert _pools(None) == _pools("untouched")
 
 
 def test_a_fit_takes_the_cores_other_work_leaves_free():
@@ -93,13 +94,13 @@ def test_a_fit_with_automatic_threads_gives_a_core_up_when_other_work_starts(
     lines = []
     try:
         torch.set_num_threads(2)  # whatever an earlier test left
-        config = FitConfig(steps=3, batch_pixels=8, warm_steps=2, validation_share=0.1)
+        config = FitConfig.of(steps=3, batch_pixels=8, warm_steps=2, validation_share=0.1)
         Trainer(tiny_scene, config, log=lines.append).train()
         assert torch.get_num_threads() == 1
     finally:
         torch.set_num_threads(before)
     assert "threads: 1 from now on (1.0 cores busy with other work)" in lines
-    asked, lines = FitConfig(steps=3, batch_pixels=8, warm_steps=2, threads=2), []
+    asked, lines = FitConfig.of(steps=3, batch_pixels=8, warm_steps=2, threads=2), []
     try:
         Trainer(tiny_scene, asked, log=lines.append).train()
         assert torch.get_num_threads() == 2  # a count asked for is kept

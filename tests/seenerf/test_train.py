@@ -18,7 +18,7 @@ from seenerf.train.trainer import Trainer
 def _config(**overrides):
     values = {"steps": 3, "batch_pixels": 6, "warm_steps": 2, "validation_share": 0.1, "threads": 2}
     values.update(overrides)
-    return FitConfig(**values)
+    return FitConfig.of(**values)
 
 
 def _parameters_changed(trainer, before):
@@ -46,14 +46,20 @@ def test_every_variant_trains_a_few_steps(variant, tiny_scene):
 
 @pytest.mark.parametrize(
     ("preset", "stated", "used"),
-    [("fast", 0.0, 0.001), ("balanced", 0.0, 0.001), ("paper", 0.0, 0.005), ("fast", 0.02, 0.02)],
+    [
+        ("fast", None, 0.001),
+        ("balanced", None, 0.001),
+        ("paper", None, 0.005),
+        ("fast", 0.02, 0.02),
+        ("paper", 0.0, 0.0),
+    ],
 )
 def test_the_event_weight_is_the_presets_unless_one_is_stated(preset, stated, used, tiny_scene):
     config = _config(preset=preset, event_weight=stated)
     trainer = Trainer(tiny_scene, config, log=lambda line: None)
     assert trainer.preset.event_weight == used
     with pytest.raises(ConfigError, match="--event-weight -0.1 is out of range"):
-        FitConfig(event_weight=-0.1).validate()
+        FitConfig.of(event_weight=-0.1).validate()
 
 
 def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked():
@@ -142,7 +148,7 @@ def test_oracle_needs_truth(tiny_scene):
 
 def test_oracle_validation_scores_its_own_sharp_hdr_supervision():
     scene = plane_scene(height=24, width=32, frames=4, b=2, test_views=1)
-    trainer = Trainer(scene, _config(variant="oracle", steps=300, batch_pixels=0))
+    trainer = Trainer(scene, _config(variant="oracle", steps=300, batch_pixels=None))
     before = trainer.validation_psnr()
     trainer.train()
     after = trainer.validation_psnr()
@@ -226,7 +232,7 @@ def test_a_run_its_budget_stops_first_anneals_only_as_far_as_its_steps(tiny_scen
 
 def test_a_budget_without_a_step_count_runs_past_the_presets_steps(tiny_scene):
     trainer = Trainer(
-        tiny_scene, _config(steps=0, time_budget_s=100.0), log=lambda line: None, spent_s=60.0
+        tiny_scene, _config(steps=None, time_budget_s=100.0), log=lambda line: None, spent_s=60.0
     )
     steps, decay, base = trainer.preset.steps, trainer.preset.lr_decay_steps, trainer.preset.lr
     assert trainer.total_steps == math.inf  # the budget or a plateau ends it
@@ -357,7 +363,7 @@ def test_the_budget_keeps_room_for_the_renders_and_scores_after_training(tiny_sc
     lines = []
     trainer = Trainer(
         tiny_scene,
-        _config(steps=0, time_budget_s=100.0, validation_share=0.2),
+        _config(steps=None, time_budget_s=100.0, validation_share=0.2),
         log=lines.append,
         spent_s=60.0,
     )
