@@ -26,8 +26,9 @@ class FrameSampler:
         exclude: flat indices ``position_in_frames * H * W + pixel`` never drawn (validation).
         device: torch device.
         subframes: sub-frames per bin of the exposure integral (:mod:`seenerf.data.subframes`).
-        settled: batches carry where each pixel was settled (``data.settled``); False: every
-            latent point counts as settled, so each bin is compared alone.
+        dead_time: the fit models the pixels' dead time, so batches carry where each pixel was
+            settled (``data.settled``); False: every latent point counts as settled, so each bin
+            is compared alone.
         correction: ``correction(c2w, frame)`` gives a batch's poses as the fit refines them
             (:class:`~seenerf.model.pose_correction.PoseCorrection`), or None for the poses
             as given.
@@ -37,12 +38,13 @@ class FrameSampler:
         self,
         data: TrainingData,
         frames: np.ndarray,
+        *,
         event_share: float = 0.5,
         calibrated: bool = True,
         exclude: np.ndarray | None = None,
         device: str = "cpu",
         subframes: int = 1,
-        settled: bool = True,
+        dead_time: bool = True,
         correction: Callable[[torch.Tensor, torch.Tensor], torch.Tensor] | None = None,
     ):
         self.height, self.width = data.image_size
@@ -62,7 +64,7 @@ class FrameSampler:
         self.channel = torch.as_tensor(data.channel, device=device).reshape(-1)
         self.bins = torch.as_tensor(data.bins if calibrated else data.bins_raw, device=device)
         shape = (data.num_frames, data.num_bins + 1, self.height, self.width)
-        known = data.settled if settled and data.settled is not None else np.ones(shape, bool)
+        known = data.settled if dead_time and data.settled is not None else np.ones(shape, bool)
         self.settled = torch.as_tensor(known, device=device)
         self.device = device
         allowed = np.ones(len(frames) * self.height * self.width, bool)

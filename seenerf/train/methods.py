@@ -195,13 +195,13 @@ class RecordingMethod(Method):
         self.frames = FrameSampler(
             data,
             np.arange(data.num_frames),
-            config.data.event_share,
-            events is None or events.calibrated,
-            self.validation.numpy(),
-            device,
-            config.model.subframes,
-            config.sensor.dead_time,
-            model.pose_correction,
+            event_share=config.data.event_share,
+            calibrated=events is None or events.calibrated,
+            exclude=self.validation.numpy(),
+            device=device,
+            subframes=config.model.subframes,
+            dead_time=config.sensor.dead_time,
+            correction=model.pose_correction,
         )
         self.scale = frame_scale(data, config)
         self.zero = torch.zeros((), device=device)

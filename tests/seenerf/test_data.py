@@ -68,7 +68,7 @@ def test_batches_carry_where_each_pixel_was_settled(use_settled):
     settled = np.ones((3, 3, 8, 10), bool)
     settled[1, 2, 5, 7] = settled[2, 0, 0, 3] = False
     data = dataclasses.replace(scene, settled=settled).validate()
-    sampler = FrameSampler(data, np.arange(3), settled=use_settled)
+    sampler = FrameSampler(data, np.arange(3), dead_time=use_settled)
     batch = sampler.batch(torch.tensor([1, 2, 0]), torch.tensor([5 * 10 + 7, 3, 5 * 10 + 7]))
     expected = [[1, 1, 0], [0, 1, 1], [1, 1, 1]] if use_settled else np.ones((3, 3))
     assert batch.settled.tolist() == np.asarray(expected, bool).tolist()
