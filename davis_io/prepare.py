@@ -21,9 +21,9 @@ __all__ = [
     "prepare_session",
 ]
 
-CALIBRATION_S_PER_MILLION_EVENTS = 1.1
-"""The calibration's seconds per million events on 2 cores: about 19 s for 16.9 M events (an
-emulated room) and 25 s for 24 M (a bright lamp)."""
+CALIBRATION_S_PER_MILLION_EVENTS = 0.9
+"""The calibration's seconds per million events on 2 cores (``seecap calibrate``, the whole
+process): 15.3 s for 16.9 M events (an emulated room) and 21.0 s for 24.2 M (a bright lamp)."""
 POSES_S_PER_PAIR = 0.012
 """Exhaustive matching's seconds per pair of latent frames, on one thread: 24-39 s for the
 3,160 pairs of 80 latent frames."""

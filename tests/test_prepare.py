@@ -25,20 +25,20 @@ def test_stage_lines_say_each_stage_and_each_quarter_with_the_time_left():
 
 
 def test_the_preparation_is_estimated_from_the_events_and_latent_frames():
-    # 24 M events at 1.1 s a million; 80 latent frames: 3,160 pairs at 0.012 s and 0.45 s each.
+    # 24 M events at 0.9 s a million; 80 latent frames: 3,160 pairs at 0.012 s and 0.45 s each.
     estimate = preparation_seconds(24_000_000, 80, calibrated=False, posed=False)
-    assert estimate.calibration_s == pytest.approx(26.4)
+    assert estimate.calibration_s == pytest.approx(21.6)
     assert estimate.poses_s == pytest.approx(37.92 + 36.0)
-    assert estimate.total_s == pytest.approx(100.32)
+    assert estimate.total_s == pytest.approx(95.52)
     assert estimate.summary() == (
-        "about 26 s to measure the sensor (24.0 M events) and 74 s for poses (80 latent frames)"
+        "about 22 s to measure the sensor (24.0 M events) and 74 s for poses (80 latent frames)"
     )
 
 
 def test_what_a_session_holds_already_takes_no_time():
     posed = preparation_seconds(24_000_000, 80, calibrated=False, posed=True)
     assert (
-        posed.poses_s == 0 and posed.summary() == "about 26 s to measure the sensor (24.0 M events)"
+        posed.poses_s == 0 and posed.summary() == "about 22 s to measure the sensor (24.0 M events)"
     )
     both = preparation_seconds(24_000_000, 80, calibrated=True, posed=True)
     assert both.total_s == 0 and both.summary() == "the sensor and poses are stored"
