@@ -6,6 +6,8 @@ STAMP := $(VENV)/.installed
 # A CPU build of torch for machines without CUDA; the package itself accepts a range.
 TORCH_PIN ?= torch==2.13.0
 DEMO_DIR ?= demo-session
+# Tools and tests run numpy as `seecap` does, without its huge-page advice (see davis_io/cli).
+export NUMPY_MADVISE_HUGEPAGE ?= 0
 
 .PHONY: install demo test fuzz browser bench bench-quick bench-blind bench-cluster bench-lens bench-sharing lint clean
 
