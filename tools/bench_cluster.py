@@ -20,7 +20,7 @@ from pathlib import Path
 
 from benchlib.cluster import FIT_THREADS
 from benchlib.machine import run_header
-from benchlib.publish import keep_report, report_parser
+from benchlib.publish import keep_report, report_folder, report_parser
 from benchlib.side_by_side import ROW_FIELDS, side_by_side_report
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,8 +56,7 @@ def _run(way: str, out: Path) -> dict:
 def main(argv: list[str] | None = None) -> int:
     parser = report_parser(__doc__.splitlines()[0], "bench-out/cluster")
     args = parser.parse_args(argv)
-    out = args.out.resolve()
-    out.mkdir(parents=True, exist_ok=True)
+    out = report_folder(args.out)
     document = {
         **run_header(),
         "ray_cpus_per_fit": FIT_THREADS,

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 from benchlib.lens import LENS_CASES, lens_report
-from benchlib.machine import run_header
-from benchlib.publish import keep_report, report_parser
+from benchlib.machine import scene_header
+from benchlib.publish import keep_report, report_folder, report_parser
 from benchlib.runner import python_command, run_measured
 
 from davis_io.emulator import EmulatedCamera
@@ -92,15 +92,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = report_parser(__doc__.splitlines()[0], "bench-out/lens")
     parser.add_argument("--budget", default="10m", help="each fit's --time-budget")
     args = parser.parse_args(argv)
-    out = args.out.resolve()
-    out.mkdir(parents=True, exist_ok=True)
-    document = {
-        **run_header(),
-        "scene": SCENE,
-        "seed": SEED,
-        "frames": FRAMES,
-        "fit": f"seecap fit SESSION --preset fast --time-budget {args.budget} --threads 1",
-    }
+    out = report_folder(args.out)
+    fit = f"seecap fit SESSION --preset fast --time-budget {args.budget} --threads 1"
+    document = scene_header(SCENE, SEED, FRAMES, fit)
     pinhole = _record(out, "pinhole", "pinhole")
     distorted = _record(out, "distorted", "random")
     document["true_lens"] = EmulatedCamera.of_session(distorted).config.optics.to_json()

@@ -24,8 +24,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
-from benchlib.machine import run_header
-from benchlib.publish import keep_report, report_parser
+from benchlib.machine import scene_header
+from benchlib.publish import keep_report, report_folder, report_parser
 from benchlib.runner import python_command, run_measured
 from benchlib.sharing import SHARING_CASES, sharing_report
 
@@ -125,16 +125,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = report_parser(__doc__.splitlines()[0], "bench-out/sharing")
     parser.add_argument("--steps", type=int, default=200, help="training steps of each fit")
     args = parser.parse_args(argv)
-    out = args.out.resolve()
-    out.mkdir(parents=True, exist_ok=True)
-    document = {
-        **run_header(),
-        "scene": SCENE,
-        "seed": SEED,
-        "frames": FRAMES,
-        "fit": f"seecap fit SESSION --preset fast --steps {args.steps} [--threads CORES]",
-        "busy": f"python -c '{BUSY}'",
-    }
+    out = report_folder(args.out)
+    fit = f"seecap fit SESSION --preset fast --steps {args.steps} [--threads CORES]"
+    document = {**scene_header(SCENE, SEED, FRAMES, fit), "busy": f"python -c '{BUSY}'"}
     session = _prepared(out)
     document["cases"] = {name: _fit(name, session, args.steps, out) for name in SHARING_CASES}
     keep_report(out, "sharing", document, sharing_report(document), args.publish)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from benchlib.machine import measured_line
+
 __all__ = ["LENS_CASES", "lens_report"]
 
 LENS_CASES = {
@@ -40,7 +42,7 @@ def lens_report(document: dict) -> str:
     reference = None if reference is None or reference.get("error") else reference
     truth = document["true_lens"]
     lines = [
-        f"Measured at {document['commit']} on {document['machine']}: `{document['command']}`.",
+        measured_line(document),
         "",
         f"Scene `{document['scene']}`, seed {document['seed']}, {document['frames']} frames; "
         f"each fit `{document['fit']}`, two side by side. The distorted lens was drawn by "

@@ -16,7 +16,9 @@ __all__ = [
     "cpu_model",
     "describe_machine",
     "exact_command",
+    "measured_line",
     "run_header",
+    "scene_header",
     "source_commit",
 ]
 
@@ -95,3 +97,13 @@ def run_header() -> dict:
         "command": exact_command(),
         "machine": describe_machine().line(),
     }
+
+
+def scene_header(scene: str, seed: int, frames: int, fit: str) -> dict:
+    """:func:`run_header` with the emulated scene every fit of the report ran on and its fit."""
+    return {**run_header(), "scene": scene, "seed": seed, "frames": frames, "fit": fit}
+
+
+def measured_line(document: dict) -> str:
+    """A report's first line: the commit, machine and command of :func:`run_header`."""
+    return f"Measured at {document['commit']} on {document['machine']}: `{document['command']}`."

@@ -28,6 +28,7 @@ __all__ = [
     "publish",
     "publish_section",
     "keep_report",
+    "report_folder",
     "report_parser",
     "section_markers",
     "splice",
@@ -128,3 +129,10 @@ def report_parser(description: str, out: str) -> argparse.ArgumentParser:
         "--publish", action="store_true", help="copy the results into the repository's report"
     )
     return parser
+
+
+def report_folder(out: Path) -> Path:
+    """A benchmark tool's ``--out`` folder, absolute and made."""
+    out = out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    return out

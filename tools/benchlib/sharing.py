@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from benchlib.machine import measured_line
+
 __all__ = ["SHARING_CASES", "SHARE_TARGET", "sharing_report"]
 
 SHARING_CASES = {
@@ -37,7 +39,7 @@ def sharing_report(document: dict) -> str:
         share = auto["steps_per_s"] / alone["steps_per_s"]
         verdict = f"{share:.2f} ({'met' if share >= SHARE_TARGET else 'missed'})"
     lines = [
-        f"Measured at {document['commit']} on {document['machine']}: `{document['command']}`.",
+        measured_line(document),
         "",
         f"Scene `{document['scene']}`, seed {document['seed']}, {document['frames']} frames, "
         f"calibrated and posed once; each fit `{document['fit']}`, one after another. The busy "

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+from benchlib.machine import measured_line
+
 __all__ = ["ROW_FIELDS", "side_by_side_report"]
 
 ROW_FIELDS = ("session", "preset", "variant", "budget_s", "seed", "status", "steps")
@@ -49,7 +51,7 @@ def side_by_side_report(document: dict) -> str:
         for measure in ("hdr_psnr", "novel_psnr")
     ]
     lines = [
-        f"Measured at {document['commit']} on {document['machine']}: `{document['command']}`.",
+        measured_line(document),
         "",
         f"The quick plan with {document['ray_cpus_per_fit']} core per fit: one rung after "
         f"another (`{local['command']}`), then each rung a Ray task on a local instance "
