@@ -27,6 +27,13 @@ from benchlib.numbers import fmt
 from benchlib.plan import METHOD
 from benchlib.runner import python_command, run_measured
 from benchlib.tables import markdown_table
+from benchlib.targets import (
+    BLIND_LOG_CONTRAST,
+    BLIND_ORACLE_GAP_DB,
+    BLIND_POSE_MEDIAN_DEG,
+    BLIND_THRESHOLD_ERROR,
+    BLIND_WHITE_BOX_GAP_DB,
+)
 from davis_io.calibration.consistency import THRESHOLD_RANGE
 from davis_io.calibration.estimate import LATENCIES_US
 from davis_io.poses.truth import compare_with_truth
@@ -341,24 +348,27 @@ def blind_targets(row: BlindRow) -> dict[str, bool | None]:
     """The blind-camera targets of one session: met (True), missed (False) or not measured."""
     full, white, oracle = (row.scores.get(v) for v in VARIANTS)
     targets: dict[str, bool | None] = {}
-    targets["log contrast 0.8-1.2"] = None if full is None else 0.8 <= full["log_contrast"] <= 1.2
+    contrast = BLIND_LOG_CONTRAST
+    targets[f"log contrast {contrast.goal}"] = contrast.met(full and full["log_contrast"])
     for measure in ("hdr", "novel"):
-        targets[f"white-box − full ≤ 1 dB ({measure})"] = (
-            None if full is None or white is None else white[measure] - full[measure] <= 1.0
-        )
-        targets[f"oracle − full ≤ 3 dB ({measure})"] = (
-            None if full is None or oracle is None else oracle[measure] - full[measure] <= 3.0
-        )
+        for name, other, target in (
+            ("white-box", white, BLIND_WHITE_BOX_GAP_DB),
+            ("oracle", oracle, BLIND_ORACLE_GAP_DB),
+        ):
+            gap = other[measure] - full[measure] if full and other else None
+            label = f"{name} − full {target.symbol} {target.limit:g} dB ({measure})"
+            targets[label] = target.met(gap)
+    pose = BLIND_POSE_MEDIAN_DEG
     median = row.poses.get("rotation_median_deg")
-    targets["poses ≤ 0.5° median"] = None if median is None else median <= 0.5
+    targets[f"poses {pose.symbol} {pose.limit:g}° median"] = pose.met(median)
     bound = row.at_a_bound()
     targets["no stored value at a search bound"] = None if bound is None else not bound
     targets["truth within 2 stated σ"] = row.within_uncertainty()
     errors = row.threshold_errors()
-    targets["thresholds within 10 % (clean pixels)"] = (
-        None
-        if not row.clean_pixel or any(math.isnan(e) for e in errors)
-        else all(abs(e) <= 0.10 for e in errors)
+    measured = row.clean_pixel and not any(math.isnan(e) for e in errors)
+    largest = max(abs(e) for e in errors) if measured else None
+    targets[f"thresholds within {100 * BLIND_THRESHOLD_ERROR.limit:g} % (clean pixels)"] = (
+        BLIND_THRESHOLD_ERROR.met(largest)
     )
     return targets
 

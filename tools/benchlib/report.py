@@ -10,7 +10,7 @@ import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from benchlib.capture import CaptureResult, meets
+from benchlib.capture import CaptureResult
 from benchlib.fits import SpeedProbe
 from benchlib.machine import Machine
 from benchlib.matching import common_steps, matched_ladder, matched_row, needs_matching
@@ -21,6 +21,19 @@ from benchlib.results import RunRow
 from benchlib.scene_images import ERROR_GAIN, IMAGES_FOLDER
 from benchlib.sessions import SessionOutcome
 from benchlib.tables import capture_table, comparison_lines, markdown_table, runs_table
+from benchlib.targets import (
+    CAPTURE_TARGETS,
+    END_TO_END_MIN,
+    FAST_OVER_PAPER_RAYS,
+    FULL_OVER_BASE_DB,
+    FULL_OVER_NO_EVENTS_DB,
+    POSES_S,
+    RENDER_VIEW_S,
+    SCENE_HDR_DB,
+    SCENE_NOVEL_DB,
+    SCENE_ORACLE_GAP_DB,
+    Target,
+)
 from benchlib.verdicts import TIE_DB, ComparisonVerdict, judge
 
 __all__ = [
@@ -206,9 +219,10 @@ def _seed_line(report: BenchReport) -> str:
     )
 
 
-def _check(name: str, value: float | None, target: str, met: bool | None) -> list[str]:
+def _check(name: str, value: float | None, target: Target) -> list[str]:
+    met = target.met(value)
     verdict = "not measured" if met is None else "met" if met else "**missed**"
-    return [name, fmt(value), target, verdict]
+    return [name, fmt(value), target.goal, verdict]
 
 
 def target_checks(report: BenchReport) -> list[list[str]]:
@@ -217,31 +231,13 @@ def target_checks(report: BenchReport) -> list[list[str]]:
     rows = comparison_rows(report, "variant", [METHOD, "base", "no-events"])
     full = rows[METHOD]
     checks = []
-    for other, target in (("base", 3.0), ("no-events", 1.0)):
+    for other, target in (("base", FULL_OVER_BASE_DB), ("no-events", FULL_OVER_NO_EVENTS_DB)):
         ok = full and rows[other] and full.ok and rows[other].ok
         value = full.hdr_psnr - rows[other].hdr_psnr if ok else None
-        checks.append(
-            _check(
-                f"full − {other}, HDR PSNR dB",
-                value,
-                f">= {target:g}",
-                None if value is None else value >= target,
-            )
-        )
+        checks.append(_check(f"full − {other}, HDR PSNR dB", value, target))
     ratio = report.speed.rays_per_s.get("fast_over_paper") if report.speed else None
-    checks.append(
-        _check(
-            "rays/s, fast ÷ paper (same process)",
-            ratio,
-            ">= 100",
-            None if ratio is None else ratio >= 100,
-        )
-    )
+    checks.append(_check("rays/s, fast ÷ paper (same process)", ratio, FAST_OVER_PAPER_RAYS))
     return checks + scene_checks(report) + capture_checks(report.capture)
-
-
-POSES_LIMIT_S = 120.0
-END_TO_END_LIMIT_S = 600.0
 
 
 def _end_to_end_s(report: BenchReport, session: str, poses_s: float) -> float | None:
@@ -256,9 +252,18 @@ def _end_to_end_s(report: BenchReport, session: str, poses_s: float) -> float | 
     return poses_s + sum(walls) if walls and math.isfinite(poses_s) else None
 
 
+def _meets_scene_targets(full: RunRow, gap: float | None) -> bool:
+    """Whether ``full``'s HDR and novel scores and its oracle gap meet the scene targets."""
+    return bool(
+        SCENE_HDR_DB.met(full.hdr_psnr)
+        and SCENE_NOVEL_DB.met(full.novel_psnr)
+        and SCENE_ORACLE_GAP_DB.met(gap)
+    )
+
+
 def scene_checks(report: BenchReport) -> list[list[str]]:
-    """Per scene: HDR and novel exposures >= 30 dB, oracle within 3 dB, a view rendered within
-    1 s, poses within 2 min, end to end from the recording within 10 min."""
+    """Per scene: HDR and novel-exposure PSNR, the oracle gap, a view's render time, the pose
+    time and the time end to end from the recording, each against its target."""
     checks = []
     for scene, full, oracle, outcome in _scene_runs(report):
         poses_s = outcome.poses_s if outcome else math.nan
@@ -266,49 +271,34 @@ def scene_checks(report: BenchReport) -> list[list[str]]:
         hdr, novel = (full.hdr_psnr, full.novel_psnr) if full.ok else (None, None)
         gap = oracle.hdr_psnr - full.hdr_psnr if oracle and full.ok else None
         render = full.render_s_per_view if math.isfinite(full.render_s_per_view) else None
-        for name, value, goal, met in (
-            ("full HDR PSNR dB", hdr, ">= 30", hdr is not None and hdr >= 30),
-            ("full novel-exposure PSNR dB", novel, ">= 30", novel is not None and novel >= 30),
-            ("oracle − full HDR PSNR dB", gap, "<= 3", gap is not None and gap <= 3),
-            ("full: render one view, s", render, "<= 1", render is not None and render <= 1),
-        ):
-            checks.append(_check(f"{scene}: {name}", value, goal, None if value is None else met))
-        measured = poses_s if math.isfinite(poses_s) else None
-        checks.append(
-            _check(
-                f"{scene}: poses from the recording, s",
-                measured,
-                f"<= {POSES_LIMIT_S:g}",
-                None if measured is None else measured <= POSES_LIMIT_S,
-            )
-        )
-        checks.append(
-            _check(
-                f"{scene}: end to end from the recording (poses, then every process of full's "
-                "runs with their renders and scores), min",
+        for name, value, target in (
+            ("full HDR PSNR dB", hdr, SCENE_HDR_DB),
+            ("full novel-exposure PSNR dB", novel, SCENE_NOVEL_DB),
+            ("oracle − full HDR PSNR dB", gap, SCENE_ORACLE_GAP_DB),
+            ("full: render one view, s", render, RENDER_VIEW_S),
+            ("poses from the recording, s", poses_s if math.isfinite(poses_s) else None, POSES_S),
+            (
+                "end to end from the recording (poses, then every process of full's runs with "
+                "their renders and scores), min",
                 None if end_to_end is None else end_to_end / 60,
-                f"<= {END_TO_END_LIMIT_S / 60:g}",
-                None if end_to_end is None else end_to_end <= END_TO_END_LIMIT_S,
-            )
-        )
+                END_TO_END_MIN,
+            ),
+        ):
+            checks.append(_check(f"{scene}: {name}", value, target))
     return checks
 
 
 def capture_checks(results: list[CaptureResult]) -> list[list[str]]:
     """Every capture-side figure that has a target: decoding, USB words, recording."""
-    checks = []
-    for result in results:
-        for name, target in result.bench.targets.items():
-            value = result.figures.get(name)
-            checks.append(
-                _check(
-                    f"{result.bench.tool}: {result.bench.figures[name].label}",
-                    value,
-                    f"{target[0]} {target[1]:g}",
-                    None if value is None else meets(value, target),
-                )
-            )
-    return checks
+    return [
+        _check(
+            f"{result.bench.tool}: {result.bench.figures[name].label}",
+            result.figures.get(name),
+            target,
+        )
+        for result in results
+        for name, target in CAPTURE_TARGETS.get(result.bench.tool, {}).items()
+    ]
 
 
 def _turn(angles: list[float]) -> str:
@@ -344,7 +334,7 @@ def scene_rows(report: BenchReport) -> list[list[str]]:
     for key, full, oracle, outcome in _scene_runs(report):
         ok = full.ok
         gap = oracle.hdr_psnr - full.hdr_psnr if oracle and ok else None
-        met = ok and full.hdr_psnr >= 30 and full.novel_psnr >= 30 and gap is not None and gap <= 3
+        met = ok and _meets_scene_targets(full, gap)
         body.append(
             [
                 key,
@@ -378,7 +368,11 @@ SCENE_HEADERS = [
     "rotation error °",
     "centre error / extent",
     "full steps",
-    "targets (≥ 30, ≥ 30, ≤ 3)",
+    "targets ("
+    + ", ".join(
+        f"{t.symbol} {t.limit:g}" for t in (SCENE_HDR_DB, SCENE_NOVEL_DB, SCENE_ORACLE_GAP_DB)
+    )
+    + ")",
 ]
 
 

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from benchlib.machine import measured_line
+from benchlib.targets import BUSY_SHARE
 
-__all__ = ["SHARING_CASES", "SHARE_TARGET", "sharing_report"]
+__all__ = ["SHARING_CASES", "sharing_report"]
 
 SHARING_CASES = {
     "alone": "the machine to itself, threads chosen by the fit",
@@ -12,9 +13,6 @@ SHARING_CASES = {
     "busy-all": "beside one busy process, one thread per core asked for (`--threads` = cores)",
 }
 """Each fit of the benchmark, by name, and what it is."""
-
-SHARE_TARGET = 0.5
-"""A fit beside one busy process trains at least this share of its throughput alone."""
 
 
 def _row(name: str, case: dict, alone: dict | None) -> str:
@@ -37,7 +35,7 @@ def sharing_report(document: dict) -> str:
     verdict = "not measured"
     if alone and not auto.get("error") and "steps_per_s" in auto:
         share = auto["steps_per_s"] / alone["steps_per_s"]
-        verdict = f"{share:.2f} ({'met' if share >= SHARE_TARGET else 'missed'})"
+        verdict = f"{share:.2f} ({'met' if BUSY_SHARE.met(share) else 'missed'})"
     lines = [
         measured_line(document),
         "",
@@ -45,7 +43,7 @@ def sharing_report(document: dict) -> str:
         f"calibrated and posed once; each fit `{document['fit']}`, one after another. The busy "
         f"process is `{document['busy']}`. Steps per second of the training alone (the fit's "
         "`metrics.json`). Target: beside one busy process, at least "
-        f"{SHARE_TARGET:.1f} of the speed alone with the threads the fit chooses: {verdict}.",
+        f"{BUSY_SHARE.limit:.1f} of the speed alone with the threads the fit chooses: {verdict}.",
         "",
         "| fit | threads | steps in training time | steps/s | share of alone |",
         "|---|---|---|---|---|",

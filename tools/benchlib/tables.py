@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from benchlib.capture import CaptureResult, meets
+from benchlib.capture import CaptureResult
 from benchlib.numbers import DASH, fmt
 from benchlib.paper import Comparison
 from benchlib.results import RunRow
+from benchlib.targets import CAPTURE_TARGETS
 from benchlib.verdicts import ComparisonVerdict
 
 __all__ = ["capture_table", "comparison_lines", "markdown_table", "runs_table"]
@@ -162,15 +163,13 @@ def capture_table(results: list[CaptureResult]) -> str:
     for result in results:
         usage = result.usage
         memory = fmt(usage.peak_rss_mb if usage else None, 0)
+        targets = CAPTURE_TARGETS.get(result.bench.tool, {})
         for name, figure in result.bench.figures.items():
-            value, target = result.figures.get(name), result.bench.targets.get(name)
+            value, target = result.figures.get(name), targets.get(name)
             shown = DASH if value is None else f"{value:,.{_digits(name)}f}"
-            goal = f"{target[0]} {target[1]:g}" if target else ""
-            verdict = (
-                ""
-                if target is None or value is None
-                else ("met" if meets(value, target) else "**missed**")
-            )
+            met = target.met(value) if target else None
+            goal = target.goal if target else ""
+            verdict = "" if met is None else "met" if met else "**missed**"
             body.append([result.bench.tool, figure.label, shown, goal, verdict, memory])
         if result.error:
             body.append([result.bench.tool, "error", result.error, "", "", memory])
