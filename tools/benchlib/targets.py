@@ -98,14 +98,15 @@ SCENE_HDR_DB = Target(">=", 30.0)
 """``full``'s HDR PSNR at the top budget, dB."""
 SCENE_NOVEL_DB = Target(">=", 30.0)
 """``full``'s novel-exposure PSNR at the top budget, dB."""
-SCENE_ORACLE_GAP_DB = Target("<=", 3.0)
+SCENE_ORACLE_GAP_DB = Target("<=", 2.0)
 """``oracle`` minus ``full``, HDR PSNR dB."""
 RENDER_VIEW_S = Target("<=", 1.0)
 """Seconds to render one held-out view."""
-POSES_S = Target("<=", 120.0)
+POSES_S = Target("<=", 60.0)
 """Seconds of the pose step from the recording (``tools/bench_poses.py``: 16 views x 5)."""
-END_TO_END_MIN = Target("<=", 10.0)
-"""Minutes from the recording to scores: poses, then every process of ``full``'s runs."""
+END_TO_END_MIN = Target("<=", 10.5)
+"""Minutes from the recording to scores: poses, then every process of ``full``'s runs (a
+ten-minute budget may end 5 % late)."""
 
 # The capture side (each tool's own verdict and the Targets table).
 DECODE_RATIO = Target(">=", 1.0)
