@@ -19,17 +19,32 @@ import numpy as np
 from davis_io.calibration.consistency import ConsistencyProblem
 from davis_io.session.defaults import DEFAULT_THRESHOLD
 
-__all__ = ["SCALES", "CommonScale", "ScaleProfile", "common_scale", "scale_profile"]
+__all__ = [
+    "MEASURED_RISE",
+    "SCALES",
+    "CommonScale",
+    "ScaleProfile",
+    "common_scale",
+    "scale_profile",
+]
 
 SCALES = np.geomspace(0.5, 2.0, 9)
 """Common scales of the thresholds the profile tries (the fit's own, 1, at the middle)."""
 
-PINNED_RISE = 0.02
+MEASURED_RISE = 0.015
 """The disagreement must rise by this fraction (of its value at the fit) within a factor of
 √2 of the fitted scale on both sides for the scale to count as measured. Measured at x0.71 and
-x1.41 on emulated recordings: 150 ms exposures rose 2.6-3.0 % (the weakest, a linear sensor
-whose scale the blur still put within 5 % of the truth) to 16-21 %; 16 ms exposures 1.4-1.8 %
-(a weak minimum at twice the truth), 1 ms exposures 0.0-0.1 %."""
+x1.41 on emulated recordings, each read from the drawn subset of pairs the fit reads (three
+draws where close): a linear sensor at 150 ms exposures (`room-s22`) 1.9-2.6 %, its fitted
+scale 0-3 % under the truth; 20 ms exposures every 200 ms (`lamp-s102`) 1.9-2.8 %, 4-8 % over;
+the default room at 256 ms 14-18 %; 16 ms exposures 0.9-1.2 %, a minimum at 2.2 times the
+truth; 1 ms exposures 0.0-0.1 %. At 2 % (before) a draw of `room-s22`'s pixels left the scale
+free, and the nominal 0.3 put its thresholds 63 % over the truth."""
+
+PINNED_RISE = 0.02
+"""The rise that bounds the scale's uncertainty: within a factor of √2 of the fit on
+emulated recordings, the scales whose disagreement rose less than this held the truth (two
+standard uncertainties)."""
 
 
 @dataclass(frozen=True)
@@ -44,16 +59,15 @@ class ScaleProfile:
     scales: np.ndarray
     rise: np.ndarray
 
-    @property
-    def interval(self) -> tuple[float, float]:
-        """The smallest and largest scale whose disagreement rises less than PINNED_RISE."""
-        inside = self.scales[self.rise < PINNED_RISE]
+    def interval(self, rise: float = PINNED_RISE) -> tuple[float, float]:
+        """The smallest and largest scale whose disagreement rises less than ``rise``."""
+        inside = self.scales[self.rise < rise]
         return float(inside.min()), float(inside.max())
 
     @property
     def pinned(self) -> bool:
-        """The scale is measured: the disagreement rises within √2 either side."""
-        low, high = self.interval
+        """The scale is measured: the disagreement rises by MEASURED_RISE within √2 each side."""
+        low, high = self.interval(MEASURED_RISE)
         return low > 1 / np.sqrt(2) + 1e-9 and high < np.sqrt(2) - 1e-9
 
     def half_width(self) -> float:
@@ -108,7 +122,7 @@ def common_scale(
     progress(f"common scale {'pinned' if profile.pinned else 'free'}: {profile.describe()}")
     if profile.pinned:
         return CommonScale(theta, True, profile.half_width() / 2)
-    low, high = profile.interval
+    low, high = profile.interval()
     progress(
         "the thresholds' common scale is not measurable here (frames too sharp): nominal "
         f"{DEFAULT_THRESHOLD}, their ratio measured; give --threshold if it is known"
