@@ -23,12 +23,12 @@ from pathlib import Path
 
 from benchlib.targets import POSES_S
 
+from davis_io.capture import CaptureRequest, record_capture
 from davis_io.emulator import EmulatedCamera
 from davis_io.poses import estimate_poses
 from davis_io.poses.truth import compare_with_truth
 from davis_io.session import DEFAULT_BINS, Session
-from davis_io.session.recorder import record
-from davis_io.session.truth import load_truth, save_truth
+from davis_io.session.truth import load_truth
 
 
 def run(
@@ -58,12 +58,10 @@ def run(
     with tempfile.TemporaryDirectory() as temporary:
         folder = (out or Path(temporary)) / f"room{views}"
         started = time.perf_counter()
-        camera = EmulatedCamera(frames=views, test_views=2)
-        record(camera, folder, bins=bins, overwrite=True)
-        save_truth(camera.truth, folder / "truth")
+        request = CaptureRequest(emulate="room", frames=views)
+        record_capture(request, folder, bins=bins, overwrite=True)
         recording_s = time.perf_counter() - started
-        config = camera.config
-        lens = None if unknown_intrinsics else config.optics
+        lens = None if unknown_intrinsics else EmulatedCamera.of_session(folder).config.optics
         stages: dict[str, float] = {}
         clock = {"stage": None, "at": time.perf_counter()}
 
