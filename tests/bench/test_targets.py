@@ -31,5 +31,5 @@ def test_a_band_holds_both_of_its_ends():
 def test_goals_read_as_the_reports_print_them():
     assert Target("<=", 120.0).goal == "<= 120"
     assert Target(">=", 0.5).goal == ">= 0.5"
-    assert Target("<=", 3.0).symbol == "≤"
+    assert Target("<=", 3.0).in_words == "≤ 3"
     assert BLIND_LOG_CONTRAST.goal == "0.8-1.2"

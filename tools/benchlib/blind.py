@@ -356,11 +356,10 @@ def blind_targets(row: BlindRow) -> dict[str, bool | None]:
             ("oracle", oracle, BLIND_ORACLE_GAP_DB),
         ):
             gap = other[measure] - full[measure] if full and other else None
-            label = f"{name} − full {target.symbol} {target.limit:g} dB ({measure})"
+            label = f"{name} − full {target.in_words} dB ({measure})"
             targets[label] = target.met(gap)
-    pose = BLIND_POSE_MEDIAN_DEG
     median = row.poses.get("rotation_median_deg")
-    targets[f"poses {pose.symbol} {pose.limit:g}° median"] = pose.met(median)
+    targets[f"poses {BLIND_POSE_MEDIAN_DEG.in_words}° median"] = BLIND_POSE_MEDIAN_DEG.met(median)
     bound = row.at_a_bound()
     targets["no stored value at a search bound"] = None if bound is None else not bound
     targets["truth within 2 stated σ"] = row.within_uncertainty()

@@ -369,9 +369,7 @@ SCENE_HEADERS = [
     "centre error / extent",
     "full steps",
     "targets ("
-    + ", ".join(
-        f"{t.symbol} {t.limit:g}" for t in (SCENE_HDR_DB, SCENE_NOVEL_DB, SCENE_ORACLE_GAP_DB)
-    )
+    + ", ".join(t.in_words for t in (SCENE_HDR_DB, SCENE_NOVEL_DB, SCENE_ORACLE_GAP_DB))
     + ")",
 ]
 

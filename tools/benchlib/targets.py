@@ -63,9 +63,9 @@ class Target:
         return f"{self.comparison} {self.limit:g}"
 
     @property
-    def symbol(self) -> str:
-        """The comparison as one sign, for example ``≤``."""
-        return _SYMBOL[self.comparison]
+    def in_words(self) -> str:
+        """The goal inside a sentence or a column name, for example ``≤ 3``."""
+        return f"{_SYMBOL[self.comparison]} {self.limit:g}"
 
 
 @dataclass(frozen=True)
