@@ -27,7 +27,7 @@ from typing import TextIO
 
 from davis_io.errors import SessionError
 
-__all__ = ["LOCK_NAME", "SessionBusy", "writer_lock"]
+__all__ = ["LOCK_NAME", "SessionBusy", "refuse_if_written", "writer_lock"]
 
 LOCK_NAME = ".writer.lock"
 
@@ -118,6 +118,26 @@ def _take(handle: TextIO, path: Path, folder: Path, shared: bool) -> None:
             f"{folder} is being written by {_holders(path)}; wait for it to finish or stop "
             "it, then run this again"
         ) from None
+
+
+def refuse_if_written(folder: Path | str) -> None:
+    """Raise :class:`SessionBusy` if another process writes ``folder`` now.
+
+    A reader's check: nothing is created, and nothing is held after it.
+
+    Raises:
+        SessionBusy: another process holds the folder's lock exclusively.
+    """
+    folder = Path(folder).resolve()
+    path = folder / LOCK_NAME
+    if folder in _held or not path.is_file() or path.is_symlink():
+        return
+    try:
+        handle = open(path, encoding="utf-8")  # noqa: SIM115 - closed below
+    except OSError:
+        return
+    with handle:
+        _take(handle, path, folder, shared=True)
 
 
 @contextmanager

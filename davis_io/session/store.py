@@ -31,7 +31,7 @@ from davis_io.session.layout import (
     read_events_between,
     write_bins_row,
 )
-from davis_io.session.lock import writer_lock
+from davis_io.session.lock import refuse_if_written, writer_lock
 from davis_io.session.manifest import (
     MANIFEST_NAME,
     STATUS_COMPLETE,
@@ -90,6 +90,7 @@ class Session(Closing):
             session = cls(folder, manifest, h5py.File(h5_path, "r"), needs_repair=False)
         except OSError as error:
             if "already open for write" not in str(error):
+                refuse_if_written(folder)  # a writer mid-flush: name it, not the file's state
                 raise SessionError(f"{h5_path}: HDF5 cannot read it ({error})") from error
         else:
             try:
@@ -102,6 +103,7 @@ class Session(Closing):
         try:
             return cls(folder, manifest, h5py.File(h5_path, "r", swmr=True), needs_repair=True)
         except OSError as error:
+            refuse_if_written(folder)
             if "not already open for SWMR writing" in str(error):
                 raise SessionError(
                     f"{h5_path}: a process adding bins or poses was killed with the file open; "

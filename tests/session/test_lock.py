@@ -73,3 +73,31 @@ def test_fits_share_a_sessions_lock_and_keep_every_exclusive_writer_out(tmp_path
     with writer_lock(tmp_path, "fitting", shared=True):
         with writer_lock(tmp_path, "adding bins"):  # alone now: made exclusive, then shared
             pass
+
+
+def test_a_file_caught_mid_write_names_its_writer_and_without_one_the_file(
+    tmp_path, aestream_aedat4
+):
+    from davis_io.cli import main
+    from davis_io.errors import SessionError
+    from davis_io.session import Session
+
+    folder = tmp_path / "s"
+    assert main(["record", "--replay", str(aestream_aedat4), "--out", str(folder)]) == 0
+    h5 = folder / "session.h5"
+    h5.write_bytes(h5.read_bytes()[: h5.stat().st_size // 2])  # as a reader sees a flush
+    with pytest.raises(SessionError, match="HDF5 cannot read it") as damaged:
+        Session.open(folder)
+    assert not isinstance(damaged.value, SessionBusy)
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLD.replace("estimating poses", "recording"), str(folder)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(SessionBusy, match=f"process {holder.pid} \\(recording"):
+            Session.open(folder)
+    finally:
+        holder.kill()
+        holder.wait(timeout=30)
