@@ -2,7 +2,7 @@
 
     python tools/bench_blind.py [--out bench-out/blind] [--budget 600] [--sessions room-s10 ...]
                                 [--fresh] [--jobs 2] [--ray ADDRESS] [--publish]
-                                [--render-only]
+                                [--render-only] [--merge FOLDER [FOLDER ...]]
 
 For every session of :data:`benchlib.blind.BLIND_SESSIONS`: record it with a random sensor, fit
 ``full`` end to end (calibration and poses included) with the budget, then ``white-box`` (the
@@ -12,7 +12,9 @@ fit's own protocol. Kept sessions and runs are read back (``--fresh`` redoes the
 2 cores. ``--publish`` then copies ``blind.json`` to ``bench-results/`` and splices the report
 into BENCHMARKS.md between its blind-benchmark markers; ``--render-only`` prints (and with
 ``--publish`` publishes) ``OUT/blind.json`` as the run left it, fitting nothing. The commit,
-command and machine stated are those at the run's start.
+command and machine stated are those at the run's start. ``--merge`` reports the runs left in
+several folders as one, each session from the last folder that has it, every run's commit and
+command stated beside its sessions.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from pathlib import Path
 from benchlib.blind import (
     BLIND_SESSIONS,
     blind_report,
+    merged_runs,
     rows_to_json,
     run_blind_session,
 )
@@ -51,6 +54,13 @@ def main(argv: list[str] | None = None) -> int:
         help="report OUT/blind.json as the last run left it, fitting nothing",
     )
     parser.add_argument(
+        "--merge",
+        nargs="+",
+        type=Path,
+        metavar="FOLDER",
+        help="report the runs these folders' blind.json hold as one, fitting nothing",
+    )
+    parser.add_argument(
         "--jobs",
         type=int,
         default=1,
@@ -65,7 +75,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     args.out = args.out.resolve()  # Ray's workers run in other folders
-    if args.render_only:
+    if args.merge:
+        document = merged_runs([json.loads((f / "blind.json").read_text()) for f in args.merge])
+    elif args.render_only:
         document = json.loads((args.out / "blind.json").read_text())
     else:
         document = _run_sessions(args)

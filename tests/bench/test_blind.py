@@ -2,6 +2,7 @@ import json
 import math
 from pathlib import Path
 
+import pytest
 from benchlib.blind import BLIND_SESSIONS, BlindRow, blind_rows_markdown, blind_targets
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -127,3 +128,33 @@ def test_render_only_reports_the_runs_own_header_and_fits_nothing(tmp_path, caps
     assert bench_blind.main(["--out", str(tmp_path), "--render-only"]) == 0
     assert "At commit `0123abcd`" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["blind.json"]
+
+
+def test_runs_merged_keep_each_sessions_own_run_and_refuse_other_budgets(tmp_path, capsys):
+    import bench_blind
+    from benchlib.blind import merged_runs
+
+    published = json.loads((ROOT / "bench-results" / "blind.json").read_text())
+    rows = {row["key"]: row for row in published["rows"]}
+    first = {**published, "commit": "aaaa", "rows": [rows["lamp-s5"], rows["room-s10"]]}
+    # The second run fitted room-s10 again: its row replaces the first run's.
+    again = {**rows["room-s10"], "end_to_end_s": 1.0}
+    second = {**published, "commit": "bbbb", "wall_s": 7200.0, "rows": [again]}
+    for name, document in (("first", first), ("second", second)):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "blind.json").write_text(json.dumps(document))
+    merged = merged_runs([first, second])
+    assert [row["key"] for row in merged["rows"]] == ["room-s10", "lamp-s5"]  # the plan's order
+    assert merged["rows"][0]["end_to_end_s"] == 1.0
+    assert [(run["commit"], run["sessions"]) for run in merged["runs"]] == [
+        ("aaaa", ["lamp-s5"]),
+        ("bbbb", ["room-s10"]),
+    ]
+    folders = [str(tmp_path / "first"), str(tmp_path / "second")]
+    assert bench_blind.main(["--out", str(tmp_path / "out"), "--merge", *folders]) == 0
+    out = capsys.readouterr().out
+    assert "In 2 runs, each session from one:" in out
+    assert "* `lamp-s5`: at commit `aaaa`" in out and "* `room-s10`: at commit `bbbb`" in out
+    assert "; 2.0 h." in out
+    with pytest.raises(ValueError, match="budget_s"):
+        merged_runs([first, {**second, "budget_s": 180.0}])

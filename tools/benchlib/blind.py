@@ -46,6 +46,7 @@ __all__ = [
     "blind_report",
     "blind_rows_markdown",
     "blind_targets",
+    "merged_runs",
     "row_from_runs",
     "run_blind_session",
 ]
@@ -515,6 +516,59 @@ def _sharing(jobs: int, threads: int) -> str:
     )
 
 
+RUN_SETTINGS = ("budget_s", "jobs", "threads_per_fit")
+"""What runs reported as one must share: each fit's budget and how the machine was shared."""
+
+
+def merged_runs(documents: list[dict]) -> dict:
+    """Several runs' ``blind.json`` documents as one: each session from the last run that has it.
+
+    The document keeps every run's commit, command, machine and wall time (``runs``), and the
+    sessions each one's rows came from, in :data:`BLIND_SESSIONS` order.
+
+    Raises:
+        ValueError: the runs gave their fits other budgets or shared the machine otherwise.
+    """
+    settings = {tuple(document[name] for name in RUN_SETTINGS) for document in documents}
+    if len(settings) > 1:
+        raise ValueError(
+            f"the runs differ in {', '.join(RUN_SETTINGS)} ({sorted(settings)}): their scores "
+            "do not compare in one table"
+        )
+    rows, source = {}, {}
+    for index, document in enumerate(documents):
+        for row in document["rows"]:
+            rows[row["key"]], source[row["key"]] = row, index
+    keys = [spec.key for spec in BLIND_SESSIONS if spec.key in rows]
+    return {
+        "runs": [
+            {
+                **{name: document[name] for name in ("commit", "command", "machine", "wall_s")},
+                "sessions": [key for key in keys if source[key] == index],
+            }
+            for index, document in enumerate(documents)
+            if index in source.values()
+        ],
+        **{name: documents[0][name] for name in RUN_SETTINGS},
+        "rows": [rows[key] for key in keys],
+    }
+
+
+def _provenance(document: dict) -> str:
+    """Which commit, command and machine measured the report: one run, or each of several."""
+    if "runs" not in document:
+        return (
+            f"At commit `{document['commit']}`, `{document['command']}`, on "
+            f"{document['machine']}; {document['wall_s'] / 3600:.1f} h. "
+        )
+    runs = [
+        f"* {', '.join(f'`{key}`' for key in run['sessions'])}: at commit `{run['commit']}`, "
+        f"`{run['command']}`, on {run['machine']}; {run['wall_s'] / 3600:.1f} h."
+        for run in document["runs"]
+    ]
+    return f"In {len(runs)} runs, each session from one:\n\n" + "\n".join(runs) + "\n\n"
+
+
 def blind_report(document: dict) -> str:
     """The blind benchmark's section of BENCHMARKS.md from its ``blind.json`` document."""
     rows = rows_from_json(document["rows"])
@@ -522,8 +576,7 @@ def blind_report(document: dict) -> str:
     return "\n\n".join(
         [
             "## Blind camera: sensors the pipeline was not written for",
-            f"At commit `{document['commit']}`, `{document['command']}`, on "
-            f"{document['machine']}; {document['wall_s'] / 3600:.1f} h. Each session films a "
+            _provenance(document) + "Each session films a "
             "built-in scene with a sensor drawn at random (`seecap record --emulate SCENE "
             "--sensor random --seed N`); `full` is `seecap fit SESSION --preset fast "
             f"--time-budget {document['budget_s']:.0f}s` from the recording, sensor "
