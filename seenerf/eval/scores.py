@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from seenerf.data.arrays import TrainingData
@@ -93,6 +95,8 @@ def format_scores(metrics: dict) -> str:
         lines.append(
             f"novel exposures (2nd, 4th):       PSNR {novel['psnr']:.2f} dB  "
             f"SSIM {novel['ssim']:.4f}"
+            if _scored(novel["psnr"])
+            else "novel exposures (2nd, 4th):       not scored (not among the exposures rendered)"
         )
         for exposure, score in metrics.get("ldr", {}).items():
             lpips = f"  LPIPS {score['lpips']:.4f}" if "lpips" in score else ""
@@ -112,12 +116,19 @@ def format_scores(metrics: dict) -> str:
         poses = metrics.get("test_poses", {})
         if poses.get("registered"):
             registered = poses["registered_scores"]
+            novel_psnr = registered["novel_exposure_psnr"]
             lines.append(
                 f"extra, not the headline: each test pose refined against its own test image "
                 f"(turned {poses['turned_deg_median']:.2f} deg median) gives HDR "
-                f"{registered['hdr_psnr']:.2f} dB, novel {registered['novel_exposure_psnr']:.2f} dB"
+                f"{registered['hdr_psnr']:.2f} dB"
+                + (f", novel {novel_psnr:.2f} dB" if _scored(novel_psnr) else "")
             )
     else:
         lines.append("no ground truth: renders written, nothing scored")
     lines.append(f"render: {metrics.get('render_s_per_view', float('nan')):.2f} s per view")
     return "\n".join(lines)
+
+
+def _scored(value: float | None) -> bool:
+    """A score was computed (JSON keeps a missing one as null, Python as NaN)."""
+    return value is not None and math.isfinite(value)

@@ -54,6 +54,9 @@ def test_fit_writes_every_output(tiny_scene, tmp_path):
     assert len(transforms["frames"]) == len(tiny_scene.test.c2w)
     assert 0.0 <= metrics["residual_blur"]["sigma_px"] <= 2.0
     assert "novel exposures" in format_scores(metrics) and "sharpness" in format_scores(metrics)
+    # One exposure rendered: no novel ones to score, and the printout says so.
+    metrics["novel_exposure"] = {"psnr": None, "ssim": None}
+    assert "novel exposures (2nd, 4th):       not scored" in format_scores(metrics)
 
 
 def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkeypatch, tmp_path):
