@@ -186,7 +186,7 @@ class ConsistencyProblem:
 
 def fit_thresholds(
     problem: ConsistencyProblem, start: tuple[float, float], tolerance: float = 1e-3
-) -> tuple[np.ndarray, float, np.ndarray]:
+) -> tuple[np.ndarray, float]:
     """ON and OFF thresholds that minimise the disagreement, from ``start``, to ``tolerance``.
 
     Levenberg-Marquardt on the residuals in events (:meth:`ConsistencyProblem.linearised`);
@@ -194,9 +194,7 @@ def fit_thresholds(
     evaluations per fit, this about 4 steps.
 
     Returns:
-        The thresholds ``(2,)``, the disagreement there (events squared) and the standard
-        uncertainties ``(2,)`` from the curvature of the disagreement (a lower bound: it
-        counts the pairs as independent).
+        The thresholds ``(2,)`` and the disagreement there (events squared).
     """
     theta = np.asarray(start, np.float64).copy()
     best = problem.disagreement(*theta)
@@ -217,17 +215,7 @@ def fit_thresholds(
         damping = max(damping / 10, _DAMPING)
         if np.max(np.abs(step)) < tolerance / 4:
             break
-    step = 0.02 * theta
-    curvature = np.empty(2)
-    for axis in range(2):
-        shift = np.zeros(2)
-        shift[axis] = step[axis]
-        up = problem.disagreement(*(theta + shift))
-        down = problem.disagreement(*(theta - shift))
-        curvature[axis] = max((up + down - 2 * best) / step[axis] ** 2, 1e-12)
-    # Mean of Q squared residuals of variance `best`: its curvature c gives var = 2 best / (Q c).
-    sd = np.sqrt(2 * best / (max(problem.pairs, 1) * curvature))
-    return theta, best, sd
+    return theta, best
 
 
 def _normal_equations(

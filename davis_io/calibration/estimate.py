@@ -225,11 +225,11 @@ def _best_latency(
 
 def _fit_with_factors(problem: ConsistencyProblem, theta, rounds: int, progress) -> np.ndarray:
     """Alternate the pixels' factors and the thresholds; the thresholds."""
-    theta, _, _ = fit_thresholds(problem, theta)
+    theta, _ = fit_thresholds(problem, theta)
     for _round in range(rounds):
         _, response = problem.solve(*theta)
         theta = fit_pixel_factors(problem, theta, response)
-        theta, _, _ = fit_thresholds(problem, theta)
+        theta, _ = fit_thresholds(problem, theta)
         progress(f"thresholds with pixel factors: ON {theta[0]:.3f}, OFF {theta[1]:.3f}")
     return theta
 
