@@ -1,11 +1,15 @@
 """Frame/event consistency: thresholds, inverse response and pixel factors that explain both.
 
 Between consecutive exposure starts, a pixel's events give the change of its ln intensity;
-its two frames give, through the inverse response ``g`` and each exposure's blur term
-(:mod:`davis_io.calibration.pixel_events`), the same change. For every pixel pair of
-consecutive frames whose values are both usable:
+its two frames give, through the inverse response ``g``, each exposure's blur term
+(:mod:`davis_io.calibration.pixel_events`) and its length ``T``, the same change. For every
+pixel pair of consecutive frames whose values are both usable:
 
-    ln g(v_(k+1)) - ln g(v_k) = theta_on N_on - theta_off N_off + ln M_(k+1) - ln M_k.
+    ln g(v_(k+1)) - ln g(v_k) = theta_on N_on - theta_off N_off + ln M_(k+1) - ln M_k
+                                + ln T_(k+1) - ln T_k.
+
+(A frame gathers light for its exposure: under a camera's auto-exposure, consecutive frames of
+the same light differ by the ratio of their exposures.)
 
 A free ``g`` could absorb any common scale of the thresholds if the frames were sharp, but
 frames integrate *linear* intensity: a blurred edge mixes bright and dark in proportions the
@@ -82,6 +86,7 @@ class ConsistencyProblem:
         usable: ``(F-1, P)`` both frames of the pair lie in the usable range.
         knots: knots of the free inverse response.
         factor_on: ``(P,)`` the pixels' ON factors (ones until fitted); ``factor_off`` OFF.
+        log_exposure: ``(F,)`` ln of each frame's exposure time.
         linear_black: None for a free response; else the black level of a linear one.
         latency_us: how much earlier the events were moved.
     """
@@ -92,6 +97,7 @@ class ConsistencyProblem:
     knots: np.ndarray
     factor_on: np.ndarray
     factor_off: np.ndarray
+    log_exposure: np.ndarray
     linear_black: float | None = None
     latency_us: int = 0
 
@@ -129,7 +135,13 @@ class ConsistencyProblem:
         change = on[pixel] * self.events.between_on[frame, pixel]
         change -= off[pixel] * self.events.between_off[frame, pixel]
         change += blur[frame + 1, pixel] - blur[frame, pixel]
+        change += self.exposure_change[frame]
         return change
+
+    @cached_property
+    def exposure_change(self) -> np.ndarray:
+        """``(F-1,)`` ln of each consecutive pair's exposure ratio (zeros at one exposure)."""
+        return np.diff(self.log_exposure)
 
     def solve(self, theta_on: float, theta_off: float) -> tuple[np.ndarray, InverseResponse]:
         """Residuals (ln units) of each usable pair and the inverse response that fits best."""
@@ -277,6 +289,7 @@ def refine_pixel_factors(
         on, off = theta[0] * problem.factor_on, theta[1] * problem.factor_off
         blur = log_blur(events, on, off, derivatives=True)
         change = on * events.between_on - off * events.between_off + np.diff(blur.value, axis=0)
+        change += problem.exposure_change[:, None]
         residual = frame_change - change
         grad_on = -(events.between_on + np.diff(blur.d_on, axis=0)) * theta[0]
         grad_off = (events.between_off - np.diff(blur.d_off, axis=0)) * theta[1]

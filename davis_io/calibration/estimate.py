@@ -179,8 +179,16 @@ class _Problems:
         )
         ones = np.ones(len(self.pixels))
         on, off = (ones, ones.copy()) if factors is None else (f.copy() for f in factors)
+        duration_us = self._recording.exposure_end_us - self._recording.exposure_start_us
         return ConsistencyProblem(
-            events, self.values, self.usable, self.knots, on, off, latency_us=latency_us
+            events,
+            self.values,
+            self.usable,
+            self.knots,
+            on,
+            off,
+            np.log(np.asarray(duration_us, np.float64)),
+            latency_us=latency_us,
         )
 
 

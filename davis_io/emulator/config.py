@@ -32,7 +32,7 @@ class EmulatorConfig:
         scene: built-in scene name (``room``, ``lamp``, ``corridor``).
         frames: number of training frames (views).
         test_views: number of held-out views in the truth.
-        exposure_us: APS exposure of every frame, µs.
+        exposure_us: APS exposure of every frame, µs (see ``exposure_steps``).
         frame_interval_us: SOF to SOF, µs; 0 means ``exposure_us`` + the default gap (50 ms).
         readout_us: reset read before and signal read after each exposure, µs.
         lead_us: device time before the first frame's readout, µs.
@@ -65,6 +65,10 @@ class EmulatorConfig:
             none.
         lens: ``pinhole``, ``random`` (a radial and tangential distortion drawn from ``seed``)
             or OpenCV's coefficients ``k1,k2,p1,p2[,k3]``.
+        exposure_steps: frame ``k`` is exposed for ``exposure_us`` times the ``k``-th of these
+            factors in turn, as a camera's auto-exposure sets it (empty: every frame for
+            ``exposure_us``); the gain stays that of ``exposure_us``, so a shorter exposure is
+            darker.
     """
 
     scene: str = "room"
@@ -95,8 +99,10 @@ class EmulatorConfig:
     event_window_us: int = 0
     still_frames: int = 0
     lens: str = "pinhole"
+    exposure_steps: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "exposure_steps", tuple(float(f) for f in self.exposure_steps))
         try:
             object.__setattr__(self, "color_filter", ColorFilter(self.color_filter))
         except ValueError:
@@ -115,6 +121,8 @@ class EmulatorConfig:
             problems.append("gain exposure and noise scale must not be negative")
         if min(self.exposure_us, self.readout_us, self.dvs_step_us, self.packet_us) <= 0:
             problems.append("exposure, readout, DVS step and packet durations must be positive")
+        if any(not 0 < factor <= 1 for factor in self.exposure_steps):
+            problems.append("exposure steps are factors of the exposure in (0, 1]")
         if self.event_window_us < 0 or not 0 <= self.still_frames <= max(self.frames - 2, 0):
             problems.append(
                 "the event window must not be negative, and still frames leave at least one "
@@ -195,11 +203,17 @@ class EmulatorConfig:
         """Sensor gain, 1 / s: the response's input is gain x radiance x exposure_s."""
         return 1e6 / (self.gain_exposure_us or self.exposure_us)
 
+    def frame_exposures_us(self) -> np.ndarray:
+        """``(F,)`` int64 each frame's exposure, µs (:attr:`exposure_steps` in turn)."""
+        steps = np.asarray(self.exposure_steps or (1.0,))
+        factors = steps[np.arange(self.frames) % len(steps)]
+        return np.maximum(np.round(self.exposure_us * factors), 1).astype(np.int64)
+
     def frame_windows(self) -> np.ndarray:
         """``(F, 4)`` int64 readout start, exposure start, exposure end, readout end, µs."""
         start = self.lead_us + np.arange(self.frames, dtype=np.int64) * self.frame_interval_us
         exposure_start = start + self.readout_us
-        exposure_end = exposure_start + self.exposure_us
+        exposure_end = exposure_start + self.frame_exposures_us()
         return np.stack([start, exposure_start, exposure_end, exposure_end + self.readout_us], 1)
 
     @property
@@ -233,7 +247,11 @@ class EmulatorConfig:
 
     def to_json(self) -> dict:
         """JSON-safe settings (:meth:`from_json` makes the same config again)."""
-        return {**asdict(self), "color_filter": self.color_filter.value}
+        return {
+            **asdict(self),
+            "color_filter": self.color_filter.value,
+            "exposure_steps": list(self.exposure_steps),
+        }
 
     @classmethod
     def from_json(cls, data: dict) -> EmulatorConfig:

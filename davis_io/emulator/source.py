@@ -145,13 +145,14 @@ class EmulatedCamera(Closing):
         """``(H, W)`` ADC values of an exposure summed from what the pixels see at ``times_us``.
 
         Args:
-            times_us: sample times of the exposure, µs.
+            times_us: sample times of the exposure, µs, from its start to its end.
             weights: their integral weights summing to 1, or None for evenly spaced times.
             rng: noise generator, or None for a noise-free frame.
         """
         subframes = np.stack([self.sensor_image(c2w) for c2w in self.trajectory.c2w(times_us)])
         settings = ApsSettings(self.sensor.response, self.config.gain_per_s)
-        return expose(subframes, self.config.exposure_us * 1e-6, settings, rng, weights)
+        exposure_s = float(times_us[-1] - times_us[0]) * 1e-6
+        return expose(subframes, exposure_s, settings, rng, weights)
 
     def _frame(self, window: np.ndarray, rng: np.random.Generator | None) -> Frame:
         times = subframe_times(int(window[1]), int(window[2]), self.config.subframes)

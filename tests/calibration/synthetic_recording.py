@@ -40,12 +40,17 @@ def _texture(rng: np.random.Generator, length: int) -> np.ndarray:
 
 
 def synthetic_recording(
-    sensor: KnownSensor, frames: int = 8, seed: int = 0, exposure_us: int = 60_000
+    sensor: KnownSensor,
+    frames: int = 8,
+    seed: int = 0,
+    exposure_us: int = 60_000,
+    exposure_steps: tuple[float, ...] = (1.0,),
 ) -> tuple[CalibrationInput, np.ndarray, np.ndarray]:
     """The recording, and each pixel's true ON and OFF thresholds ``(H, W)``.
 
-    Frames expose for ``exposure_us`` (at most 90 ms) every 100 ms; the texture slides
-    0.25 px per ms with a sway.
+    Frames expose every 100 ms, frame ``k`` for ``exposure_us`` (at most 90 ms) times the
+    ``k``-th of ``exposure_steps`` in turn, as an auto-exposure sets them: a shorter exposure
+    gathers less light. The texture slides 0.25 px per ms with a sway.
     """
     rng = np.random.default_rng(seed)
     interval_us = 100_000
@@ -64,12 +69,15 @@ def synthetic_recording(
     theta_off = np.maximum(rng.normal(sensor.threshold_off, sensor.spread, size), 0.02)
     events = _ideal_events(log_radiance, times, theta_on, theta_off)
     starts = 10_000 + np.arange(frames) * interval_us
+    factors = np.resize(np.asarray(exposure_steps, np.float64), frames)
+    durations = np.round(exposure_us * factors).astype(np.int64)
     images = []
-    for start in starts:
-        inside = (times >= start) & (times <= start + exposure_us)
+    for start, duration, factor in zip(starts, durations, factors, strict=True):
+        inside = (times >= start) & (times <= start + duration)
         weights = np.full(inside.sum(), 1.0)
         weights[[0, -1]] = 0.5
-        linear = np.tensordot(weights / weights.sum(), np.exp(log_radiance[inside]), axes=1)
+        light = np.tensordot(weights / weights.sum(), np.exp(log_radiance[inside]), axes=1)
+        linear = factor * light
         noisy = linear * (1 + rng.normal(0, 0.004, size))
         images.append(np.round(np.clip(sensor.response(noisy), 0, 1) * 1023) / 1023)
     recording = CalibrationInput(
@@ -80,7 +88,7 @@ def synthetic_recording(
         y=events["y"],
         is_on=events["on"],
         exposure_start_us=starts,
-        exposure_end_us=starts + exposure_us,
+        exposure_end_us=starts + durations,
     )
     return recording, theta_on, theta_off
 

@@ -117,3 +117,17 @@ def test_frames_too_sharp_for_the_scale_keep_the_measured_ratio_at_the_nominal_s
     assert ratio == pytest.approx(np.median(theta_off) / np.median(theta_on), rel=0.03)
     # The profile is flat over a factor of two or more: the stated uncertainty says so.
     assert calibration.threshold_on_sd > 0.4 * calibration.threshold_on
+
+
+@pytest.mark.parametrize("family", ["linear", "reinhard_gamma"])
+def test_an_auto_exposure_that_changes_every_frame_is_measured_as_a_fixed_one(family):
+    # 60, 30 and 15 ms in turn at one gain: consecutive frames of the same light differ by
+    # ln 2 or ln 4, which the events do not see and the exposures' lengths explain.
+    recording, theta_on, theta_off = synthetic_recording(
+        KnownSensor(0.25, 0.35, 0.02, FAMILIES[family]), exposure_steps=(1.0, 0.5, 0.25)
+    )
+    calibration = calibrate_frames(recording)
+    assert calibration.threshold_on == pytest.approx(np.median(theta_on), rel=0.03)
+    assert calibration.threshold_off == pytest.approx(np.median(theta_off), rel=0.03)
+    assert calibration.response_linear is (family == "linear")
+    assert calibration.assumed == {}

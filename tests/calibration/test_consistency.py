@@ -25,7 +25,13 @@ def _hot_pixel_problem() -> ConsistencyProblem:
     )
     values = np.array([[0.3, 0.4], [0.5, 0.45]])
     return ConsistencyProblem(
-        events, values, np.ones((1, 2), bool), np.linspace(0, 1, 16), np.ones(2), np.ones(2)
+        events,
+        values,
+        np.ones((1, 2), bool),
+        np.linspace(0, 1, 16),
+        np.ones(2),
+        np.ones(2),
+        np.zeros(2),
     )
 
 

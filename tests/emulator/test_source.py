@@ -154,6 +154,23 @@ def test_monochrome_sensor_gives_one_channel_truth(tmp_path):
     assert load_truth(folder).color_filter is ColorFilter.MONO
 
 
+def test_an_auto_exposure_shortens_the_frames_it_darkens():
+    # Half and quarter of 20 ms in turn, at the gain of 20 ms: each frame gathers its share.
+    camera, packets = record(seed=1, aps_noise=False, frames=3, exposure_steps=(1.0, 0.5, 0.25))
+    frames = [f for p in packets for f in p.frames]
+    lengths = [f.exposure_end_us - f.exposure_start_us for f in frames]
+    assert lengths == [20_000, 10_000, 5_000]
+    assert camera.truth.exposure_us == 20_000  # the gain's exposure, the test views'
+    for index, (frame, share) in enumerate(zip(frames, (1.0, 0.5, 0.25), strict=True)):
+        times = camera.truth.train_time_us[index]
+        subframes = np.stack([camera.sensor_image(c2w) for c2w in camera.trajectory.c2w(times)])
+        settings = ApsSettings(gain_per_s=50.0)
+        expected = expose(subframes, 0.02 * share, settings, None)
+        np.testing.assert_array_equal(frame.image, expected)
+    with pytest.raises(UsageError, match="exposure steps"):
+        EmulatedCamera("room", exposure_steps=(1.0, 1.5))
+
+
 def test_from_config_reproduces_the_camera(small):
     camera, packets = small
     again = EmulatedCamera.from_config(camera.config)
