@@ -54,6 +54,8 @@ class CaptureRequest:
             (None: the file's).
         event_window_us: the emulator keeps only the events this near an exposure, µs (0: all).
         still_frames: the emulator holds the camera still for this many frames mid-recording.
+        exposure_steps: the emulator's auto exposure, each frame a share of the exposure in
+            turn (empty: every frame the exposure).
         lens: the emulator's lens: ``pinhole``, ``random`` or OpenCV's ``k1,k2,p1,p2[,k3]``.
     """
 
@@ -68,6 +70,7 @@ class CaptureRequest:
     color_filter: ColorFilter | None = None
     event_window_us: int = 0
     still_frames: int = 0
+    exposure_steps: tuple[float, ...] = ()
     lens: str = "pinhole"
 
     @property
@@ -108,6 +111,7 @@ def _open_emulator(request: CaptureRequest) -> PacketSource:
         "seed": request.seed,
         "event_window_us": request.event_window_us,
         "still_frames": request.still_frames,
+        "exposure_steps": request.exposure_steps,
         "lens": request.lens,
     }
     if request.exposure_us is not None:

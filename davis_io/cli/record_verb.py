@@ -74,6 +74,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "in the middle of the recording",
     )
     parser.add_argument(
+        "--auto-exposure",
+        type=_exposure_shares,
+        default=(),
+        metavar="SHARES",
+        help="with --emulate: expose each frame for these shares of --exposure in turn, as a "
+        "camera's auto exposure does (1,0.5,0.25; the gain stays --exposure's, so a shorter "
+        "frame is darker; default: every frame for --exposure)",
+    )
+    parser.add_argument(
         "--lens",
         default="pinhole",
         metavar="pinhole|random|K1,K2,P1,P2[,K3]",
@@ -109,12 +118,13 @@ def run(args: argparse.Namespace) -> int:
         or args.seed
         or args.event_window
         or args.still_frames
+        or args.auto_exposure
         or args.lens != "pinhole"
     )
     if args.emulate is None and emulator_only:
         raise UsageError(
-            "--sensor, --seed, --event-window, --still-frames and --lens describe the emulated "
-            "camera: use them with --emulate"
+            "--sensor, --seed, --event-window, --still-frames, --auto-exposure and --lens "
+            "describe the emulated camera: use them with --emulate"
         )
     if args.replay is None and args.color_filter is not None:
         raise UsageError("--color-filter describes a replayed file's sensor: use it with --replay")
@@ -130,6 +140,7 @@ def run(args: argparse.Namespace) -> int:
         color_filter=None if args.color_filter is None else ColorFilter(args.color_filter),
         event_window_us=_duration(args.event_window, "--event-window", EXPOSURE_S) or 0,
         still_frames=args.still_frames,
+        exposure_steps=args.auto_exposure,
         lens=args.lens,
     )
     if args.replay is not None and args.exposure is not None:
@@ -211,3 +222,16 @@ def _summary(result) -> str:
     if result.warnings:
         lines.append(f"warnings  {len(result.warnings)} (printed above)")
     return "\n".join(lines)
+
+
+def _exposure_shares(text: str) -> tuple[float, ...]:
+    """``--auto-exposure``'s comma-separated shares of the exposure, each in (0, 1]."""
+    try:
+        shares = tuple(float(part) for part in text.split(","))
+    except ValueError:
+        shares = ()
+    if not shares or any(not 0 < share <= 1 for share in shares):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a list of shares of the exposure in (0, 1], e.g. 1,0.5,0.25"
+        )
+    return shares
