@@ -119,11 +119,23 @@ def test_the_plan_has_ten_sessions_four_recorded_as_users_do():
     assert {s.response.family for s in sensors} == {"linear", "reinhard_gamma", "film", "s_curve"}
 
 
+def one_run(commit: str) -> dict:
+    """The published sessions as one run's ``blind.json`` at ``commit``."""
+    published = json.loads((ROOT / "bench-results" / "blind.json").read_text())
+    published.pop("runs", None)
+    return {
+        **published,
+        "commit": commit,
+        "command": "python tools/bench_blind.py",
+        "machine": "a test machine",
+        "wall_s": 3600.0,
+    }
+
+
 def test_render_only_reports_the_runs_own_header_and_fits_nothing(tmp_path, capsys):
     import bench_blind  # tools/, on the path by conftest
 
-    document = json.loads((ROOT / "bench-results" / "blind.json").read_text())
-    document["commit"] = "0123abcd"  # not this checkout's: the run's own must be kept
+    document = one_run("0123abcd")  # not this checkout's commit: the run's own must be kept
     (tmp_path / "blind.json").write_text(json.dumps(document))
     assert bench_blind.main(["--out", str(tmp_path), "--render-only"]) == 0
     assert "At commit `0123abcd`" in capsys.readouterr().out
@@ -134,12 +146,12 @@ def test_runs_merged_keep_each_sessions_own_run_and_refuse_other_budgets(tmp_pat
     import bench_blind
     from benchlib.blind import merged_runs
 
-    published = json.loads((ROOT / "bench-results" / "blind.json").read_text())
+    published = one_run("aaaa")
     rows = {row["key"]: row for row in published["rows"]}
-    first = {**published, "commit": "aaaa", "rows": [rows["lamp-s5"], rows["room-s10"]]}
+    first = {**published, "rows": [rows["lamp-s5"], rows["room-s10"]]}
     # The second run fitted room-s10 again: its row replaces the first run's.
     again = {**rows["room-s10"], "end_to_end_s": 1.0}
-    second = {**published, "commit": "bbbb", "wall_s": 7200.0, "rows": [again]}
+    second = {**one_run("bbbb"), "wall_s": 7200.0, "rows": [again]}
     for name, document in (("first", first), ("second", second)):
         (tmp_path / name).mkdir()
         (tmp_path / name / "blind.json").write_text(json.dumps(document))
