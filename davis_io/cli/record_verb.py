@@ -214,7 +214,7 @@ def _summary(result) -> str:
         f"frames    {manifest.frame_count}   events {manifest.event_count}   bins b={manifest.b}",
         "exposure  applied "
         + (f"{requested / 1000:.3f} ms" if requested is not None else "- (from the file)")
-        + "   measured "
+        + "   measured (median) "
         + (f"{measured / 1000:.3f} ms" if measured is not None else "- (no frame)"),
         f"drops     {manifest.drops.total_events} events, {manifest.drops.queue_frames} frames; "
         f"{manifest.drops.frames_events_lost} frames flagged for lost events",

@@ -110,6 +110,7 @@ def _summary(session: Session) -> dict:
         "events": session.event_count,
         "exposure_requested_us": manifest.exposure_requested_us,
         "exposure_measured_us": _median(table.exposure_us),
+        "exposure_range_us": _range(table.exposure_us),
         "frames_events_lost": int(table.events_lost.sum()),
         "event_gaps": _gaps(session.event_gaps()),
         "events_per_exposure_median": None if counts is None else _median(counts),
@@ -165,6 +166,14 @@ def _gaps(gaps: np.ndarray) -> str:
 
 def _median(values: np.ndarray) -> int | None:
     return int(np.median(values)) if len(values) else None
+
+
+def _range(exposures_us: np.ndarray) -> str:
+    """The shortest and longest exposure, or that every frame had the same (or none was)."""
+    if len(exposures_us) == 0:
+        return "no frame"
+    low, high = int(exposures_us.min()), int(exposures_us.max())
+    return "every frame the same" if low == high else f"{low}..{high} (an auto exposure)"
 
 
 def _frame_rows(session: Session) -> list[dict]:

@@ -22,3 +22,17 @@ def test_emulated_recording_keeps_exposure_frames_and_truth(tmp_path):
         # Frame interval: exposure + 50 ms (the emulator's and the camera's default).
         starts = session.frames_table().exposure_start_us
         assert starts[1] - starts[0] == 70_000
+
+
+def test_an_auto_exposure_recording_keeps_each_frames_exposure(tmp_path):
+    from davis_io.session.inspect import session_report
+
+    request = CaptureRequest(
+        exposure_us=20_000, frames=3, emulate="room", exposure_steps=(1.0, 0.5, 0.25)
+    )
+    result = record_capture(request, tmp_path / "s", bins=4)
+    assert result.manifest.exposure_measured_us == 10_000  # the median frame's
+    with Session.open(tmp_path / "s") as session:
+        assert session.frames_table().exposure_us.tolist() == [20_000, 10_000, 5_000]
+    report = session_report(tmp_path / "s", frames=False, repair=False, as_json=False)
+    assert "5000..20000 (an auto exposure)" in report
