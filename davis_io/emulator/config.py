@@ -66,7 +66,7 @@ class EmulatorConfig:
         lens: ``pinhole``, ``random`` (a radial and tangential distortion drawn from ``seed``)
             or OpenCV's coefficients ``k1,k2,p1,p2[,k3]``.
         exposure_steps: frame ``k`` is exposed for ``exposure_us`` times the ``k``-th of these
-            factors in turn, as a camera's auto-exposure sets it (empty: every frame for
+            shares in turn, as a camera's auto-exposure sets it (empty: every frame for
             ``exposure_us``); the gain stays that of ``exposure_us``, so a shorter exposure is
             darker.
     """
@@ -122,7 +122,7 @@ class EmulatorConfig:
         if min(self.exposure_us, self.readout_us, self.dvs_step_us, self.packet_us) <= 0:
             problems.append("exposure, readout, DVS step and packet durations must be positive")
         if any(not 0 < factor <= 1 for factor in self.exposure_steps):
-            problems.append("exposure steps are factors of the exposure in (0, 1]")
+            problems.append("exposure steps are shares of the exposure in (0, 1]")
         if self.event_window_us < 0 or not 0 <= self.still_frames <= max(self.frames - 2, 0):
             problems.append(
                 "the event window must not be negative, and still frames leave at least one "
@@ -204,10 +204,10 @@ class EmulatorConfig:
         return 1e6 / (self.gain_exposure_us or self.exposure_us)
 
     def frame_exposures_us(self) -> np.ndarray:
-        """``(F,)`` int64 each frame's exposure, µs (:attr:`exposure_steps` in turn)."""
+        """``(F,)`` int64 each frame's exposure, µs (:attr:`exposure_steps`' shares in turn)."""
         steps = np.asarray(self.exposure_steps or (1.0,))
-        factors = steps[np.arange(self.frames) % len(steps)]
-        return np.maximum(np.round(self.exposure_us * factors), 1).astype(np.int64)
+        shares = steps[np.arange(self.frames) % len(steps)]
+        return np.maximum(np.round(self.exposure_us * shares), 1).astype(np.int64)
 
     def frame_windows(self) -> np.ndarray:
         """``(F, 4)`` int64 readout start, exposure start, exposure end, readout end, µs."""
