@@ -70,6 +70,8 @@ class BlindSpec:
         event_window_ms: events kept only this near an exposure (0: every event).
         still_frames: frames mid-recording with the camera held still.
         lens: the emulator's lens (``pinhole``, ``random``: a distortion drawn from the seed).
+        auto_exposure: each frame exposed for these shares of the exposure in turn (empty:
+            every frame the exposure).
     """
 
     scene: str
@@ -79,6 +81,7 @@ class BlindSpec:
     event_window_ms: float = 0.0
     still_frames: int = 0
     lens: str = "pinhole"
+    auto_exposure: tuple[float, ...] = ()
 
     @property
     def key(self) -> str:
@@ -96,6 +99,8 @@ class BlindSpec:
             options += ["--still-frames", str(self.still_frames)]
         if self.lens != "pinhole":
             options += ["--lens", self.lens]
+        if self.auto_exposure:
+            options += ["--auto-exposure", ",".join(f"{share:g}" for share in self.auto_exposure)]
         return options
 
     def describe(self) -> str:
@@ -110,6 +115,9 @@ class BlindSpec:
             parts.append(f"{self.still_frames} frames held still")
         if self.lens != "pinhole":
             parts.append(f"a {self.lens} distorted lens")
+        if self.auto_exposure:
+            shares = "/".join(f"{self.exposure_s * 1000 * share:g}" for share in self.auto_exposure)
+            parts.append(f"an auto exposure of {shares} ms in turn")
         return "; ".join(parts)
 
 
@@ -125,8 +133,9 @@ BLIND_SESSIONS = (
     BlindSpec("corridor", 103, still_frames=4),
     BlindSpec("room", 104, 0.05, 0.2, event_window_ms=3),
     BlindSpec("lamp", 105, lens="random"),
+    BlindSpec("corridor", 106, auto_exposure=(1.0, 0.5, 0.25)),
 )
-"""Eleven sessions over the three scenes. The first six record as the emulator does by default
+"""Twelve sessions over the three scenes. The first six record as the emulator does by default
 (150 ms exposures, continuous events): three monochrome (room-s22, lamp-s5, lamp-s9), three
 whose pixels have no refractory period and a fast cut-off (room-s10, room-s22, corridor-s16,
 where the threshold target applies), the four response families among them. The other four
@@ -134,7 +143,8 @@ record as users do, seeds 101-104 taken in order before any was fitted: view by 
 only within 3 ms of each 50 ms exposure, a frame every 200 ms; room-s101 mono, room-s104 RGGB),
 20 ms exposures every 200 ms (lamp-s102, RGGB) and four frames held still (corridor-s103).
 Seed 105 records through a distorted lens drawn from its seed, fitted without its calibration
-(COLMAP estimates the lens)."""
+(COLMAP estimates the lens); seed 106, taken next before it was fitted, with an auto exposure
+(150, 75 and 37.5 ms in turn at one gain)."""
 
 
 @dataclass
