@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import TypeVar
-
 from davis_io import SeecapError
 
 __all__ = [
@@ -14,10 +11,7 @@ __all__ = [
     "SeeNerfError",
     "TrainingDataError",
     "TrainingStopped",
-    "by_name",
 ]
-
-T = TypeVar("T")
 
 
 class SeeNerfError(SeecapError):
@@ -54,14 +48,3 @@ class TrainingStopped(SeeNerfError):
     def __init__(self, message: str, signal_number: int):
         super().__init__(message)
         self.exit_status = 128 + signal_number
-
-
-def by_name(table: Mapping[str, T], what: str, name: str) -> T:
-    """The entry of ``table`` called ``name`` (a preset, a variant).
-
-    Raises:
-        OptionError: unknown name (the message lists the known ones).
-    """
-    if name not in table:
-        raise OptionError(f"unknown {what} {name!r}; choose one of: {', '.join(table)}")
-    return table[name]

@@ -72,7 +72,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def config_from_options(args: argparse.Namespace) -> FitConfig:
-    """The configuration the parsed options state (not yet validated)."""
+    """The configuration the parsed options state."""
     return FitConfig(
         **{name: group(**dataclass_values(group, args)) for name, group in GROUPS.items()}
     )
@@ -91,7 +91,6 @@ def run(args: argparse.Namespace) -> int:
         defaults = FitConfig().options()
         given = {name: value for name, value in config.options().items() if value != defaults[name]}
         config = load_config(args.config).replaced(**given)
-    config = config.validate()
     if args.ray is not None and args.camera_calibration is not None:
         raise OptionError(
             "--camera-calibration with --ray: estimate each session's poses first with "

@@ -242,6 +242,39 @@ class FitConfig:
     schedule: ScheduleConfig = field(default_factory=ScheduleConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
 
+    def __post_init__(self):
+        """Check names and ranges: a configuration that exists is valid.
+
+        Raises:
+            OptionError: naming the option, the value and the accepted values.
+        """
+        # Imported here, not above: the variants build torch modules, and FitConfig is read
+        # (without torch) by every ``seecap`` verb's parser, fit's options coming from its fields.
+        from seenerf.model.variants import LOW_PASS_READINGS, VARIANTS
+
+        options = self.options()
+        for name, table in (
+            ("preset", PRESETS),
+            ("variant", VARIANTS),
+            ("low_pass", LOW_PASS_READINGS),
+            *_CHOICES.items(),
+        ):
+            if options[name] not in table:
+                raise OptionError(
+                    f"{name} {options[name]!r} is unknown; choose one of: {', '.join(table)}"
+                )
+        problems = [
+            bounds.problem(option_name(name), options[name])
+            for name, bounds in FIELD_BOUNDS.items()
+            if options[name] is not None or name not in _LEFT_OPEN
+        ] + [_EXPOSURE.problem("--exposures", exposure) for exposure in options["exposures_s"]]
+        for problem in problems:
+            if problem is not None:
+                raise OptionError(problem)
+        for name in ("dead_time", "frame_noise", "register_test_views", "refine_poses"):
+            if not isinstance(options[name], bool):
+                raise OptionError(f"{name} {options[name]!r} must be true or false")
+
     @classmethod
     def of(cls, **options) -> FitConfig:
         """The default configuration with the options named, each in its group.
@@ -276,40 +309,6 @@ class FitConfig:
             for group in GROUPS
             for name, value in dataclasses.asdict(getattr(self, group)).items()
         }
-
-    def validate(self) -> FitConfig:
-        """Check names and ranges; return self.
-
-        Raises:
-            OptionError: naming the option, the value and the accepted values.
-        """
-        # Imported here, not above: the variants build torch modules, and FitConfig is read
-        # (without torch) by every ``seecap`` verb's parser, fit's options coming from its fields.
-        from seenerf.model.variants import LOW_PASS_READINGS, VARIANTS
-
-        options = self.options()
-        for name, table in (
-            ("preset", PRESETS),
-            ("variant", VARIANTS),
-            ("low_pass", LOW_PASS_READINGS),
-            *_CHOICES.items(),
-        ):
-            if options[name] not in table:
-                raise OptionError(
-                    f"{name} {options[name]!r} is unknown; choose one of: {', '.join(table)}"
-                )
-        problems = [
-            bounds.problem(option_name(name), options[name])
-            for name, bounds in FIELD_BOUNDS.items()
-            if options[name] is not None or name not in _LEFT_OPEN
-        ] + [_EXPOSURE.problem("--exposures", exposure) for exposure in options["exposures_s"]]
-        for problem in problems:
-            if problem is not None:
-                raise OptionError(problem)
-        for name in ("dead_time", "frame_noise", "register_test_views", "refine_poses"):
-            if not isinstance(options[name], bool):
-                raise OptionError(f"{name} {options[name]!r} must be true or false")
-        return self
 
     def training_key(self) -> dict:
         """What a checkpoint must agree with to be resumed.
@@ -354,7 +353,7 @@ def load_config(path: Path) -> FitConfig:
                 for name, value in saved.items()
             }
         options["exposures_s"] = tuple(options.get("exposures_s", ()))
-        return FitConfig.of(**options).validate()
+        return FitConfig.of(**options)
     except OptionError as error:
         raise OptionError(f"{path}: {error}") from None
     except (OSError, KeyError, TypeError, AttributeError, json.JSONDecodeError) as error:

@@ -6,10 +6,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from seenerf.errors import by_name
 from seenerf.render.sampler_spec import SamplerSpec
 
-__all__ = ["DEFAULT_PRESET", "PRESETS", "Preset", "get_preset", "size_field"]
+__all__ = ["DEFAULT_PRESET", "PRESETS", "Preset", "size_field", "with_stated"]
 
 
 @dataclass(frozen=True)
@@ -115,13 +114,9 @@ DEFAULT_PRESET = "fast"
 """The preset of a fit that names none."""
 
 
-def get_preset(name: str) -> Preset:
-    """The preset called ``name``.
-
-    Raises:
-        ConfigError: unknown name (the message lists the known ones).
-    """
-    return by_name(PRESETS, "preset", name)
+def with_stated(preset: Preset, **stated) -> Preset:
+    """The preset with each value a configuration states in place of its own (None: its own)."""
+    return replace(preset, **{name: value for name, value in stated.items() if value is not None})
 
 
 def size_field(preset: Preset, span_px: float) -> Preset:

@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 
 from torch import nn
 
-from seenerf.errors import by_name
 from seenerf.model.imaging import LDR_FIELD, PIXEL, POINT, Imaging
 from seenerf.sensors.event_crf import EventModelSpec
 from seenerf.sensors.rgb_crf import PowerCrf, RgbCrf, TabulatedCrf
@@ -15,7 +14,6 @@ __all__ = [
     "LOW_PASS_READINGS",
     "VARIANTS",
     "Variant",
-    "get_variant",
 ]
 
 
@@ -99,12 +97,3 @@ LOW_PASS_READINGS: dict[str, dict] = {
 }
 """How ``full``'s delay filter reads eq. 10: the reference code (first order on log radiance)
 or the paper's text (second order on linear radiance, ln afterwards)."""
-
-
-def get_variant(name: str) -> Variant:
-    """The variant called ``name``.
-
-    Raises:
-        ConfigError: unknown name (the message lists the known ones).
-    """
-    return by_name(VARIANTS, "variant", name)

@@ -14,8 +14,8 @@ from seenerf.errors import ConfigError
 from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.pose_correction import PoseCorrection
-from seenerf.model.presets import Preset, get_preset, size_field
-from seenerf.model.variants import LOW_PASS_READINGS, get_variant
+from seenerf.model.presets import PRESETS, Preset, size_field, with_stated
+from seenerf.model.variants import LOW_PASS_READINGS, VARIANTS
 from seenerf.render.frustum import forward_facing_space, frustum_box
 from seenerf.render.rays import in_any_view, scene_box_from_cameras
 from seenerf.render.renderer import RadianceRenderer
@@ -62,7 +62,10 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
         return None
     if crf is TabulatedCrf:
         if data.truth is None or not len(data.truth.crf_value):
-            raise ConfigError("the true response is unknown: this session's truth has no crf/")
+            raise ConfigError(
+                "the true response is unknown: this session has no ground truth with a crf/ "
+                "(an emulated session's truth/); fit another variant"
+            )
         return TabulatedCrf(data.truth.crf_log_exposure, data.truth.crf_value)
     anchor = {
         "anchor_log_exposure": config.sensor.anchor_log_exposure,
@@ -82,11 +85,15 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
 
 
 def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[SeeNerfModel, Preset]:
-    """The model and the preset resized for this scene (field resolution from extent and sensor)."""
-    variant = get_variant(config.model.variant)
+    """The model, and its preset with the configuration's values, its field sized for this scene.
+
+    The field's resolution follows the scene's extent on the sensor (:func:`size_field`).
+    """
+    variant = VARIANTS[config.model.variant]
+    crf = rgb_response(variant.crf, data, config)
     method = method_class(variant)
-    poses, bounds = method.training_frame(data, config)
-    preset = get_preset(config.model.preset)
+    poses, bounds = method.training_frame(data, config, variant)
+    preset = PRESETS[config.model.preset]
     space = (
         forward_facing_space(poses, data.intrinsics, bounds, data.image_size)
         if preset.space == "auto"
@@ -95,12 +102,18 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
     if space is not None:
         box = frustum_box(space, poses, data.intrinsics, bounds, data.image_size)
         view_bounds = np.array([space.near, 1.5 * float(bounds[1])])
-        preset = size_field(preset, box.size / 2.0 * data.image_size[1])  # image: 2 NDC units
+        span_px = box.size / 2.0 * data.image_size[1]  # the image spans 2 NDC units
     else:
         box = scene_box_from_cameras(poses, data.intrinsics, bounds, data.image_size)
         view_bounds = bounds
         median_depth = float(np.sqrt(bounds[0] * bounds[1]))
-        preset = size_field(preset, float(data.intrinsics[0]) * box.size / median_depth)
+        span_px = float(data.intrinsics[0]) * box.size / median_depth
+    preset = with_stated(
+        size_field(preset, span_px),
+        pixels_per_step=config.data.batch_pixels,
+        warm_steps=config.schedule.warm_steps,
+        event_weight=config.model.event_weight,
+    )
     renderer = RadianceRenderer(preset.field, preset.field_args, preset.sampler, box, space)
     if renderer.grid is not None:
 
@@ -129,7 +142,7 @@ def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[See
         float(bounds[0]),
         float(bounds[1]),
         float(np.median(data.exposure_s)),
-        crf=rgb_response(variant.crf, data, config),
+        crf=crf,
         event_args={
             "threshold": data.threshold,
             "cutoff_hz": data.cutoff_hz or config.sensor.cutoff_hz,

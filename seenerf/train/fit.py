@@ -22,7 +22,7 @@ from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
 from seenerf.eval.report import is_session_run, write_report
 from seenerf.model.config import FitConfig, save_config
-from seenerf.model.variants import get_variant
+from seenerf.model.variants import VARIANTS
 from seenerf.provenance import software
 from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.builder import with_refined_poses
@@ -105,15 +105,15 @@ def fit_session(
         spent_s: seconds of the time budget already spent (calibration and poses).
         on_step: called with the trainer after every training step (a progress bar).
     """
-    config = config.validate()
     session_dir = Path(session_dir)
     start = time.perf_counter()
-    variant = get_variant(config.model.variant)
     run_dir = run_folder(session_dir, config, run_name)
+    bins = session_bins(session_dir, config)
+    variant = VARIANTS[config.model.variant]
     with writer_lock(session_dir, f"fitting {run_dir.name}", shared=True):
         data = load_training_data(
             session_dir,
-            session_bins(session_dir, config),
+            bins,
             sensor_from_truth=variant.sensor_from_truth,
             threshold=config.sensor.threshold,
         )

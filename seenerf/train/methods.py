@@ -8,7 +8,6 @@ a method for the terms of a step and its score, and never which variant it serve
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -19,13 +18,13 @@ import torch
 from seenerf.data.arrays import TrainingData
 from seenerf.data.batching import FrameSampler, SharpTruthSampler
 from seenerf.data.frames import truth_to_fit_frame
-from seenerf.errors import ConfigError, by_name
+from seenerf.errors import ConfigError, OptionError
 from seenerf.eval.metrics import psnr
 from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.pose_correction import PRIOR_WEIGHT as POSE_PRIOR_WEIGHT
 from seenerf.model.presets import Preset
-from seenerf.model.variants import Variant, get_variant
+from seenerf.model.variants import Variant
 from seenerf.train.losses import (
     event_loss,
     hdr_tone_map,
@@ -44,7 +43,6 @@ __all__ = [
     "Step",
     "frame_scale",
     "make_method",
-    "merged_preset",
     "method_class",
 ]
 
@@ -81,21 +79,6 @@ class Step:
         return {term.name: float(term.value.detach()) for term in self.terms}
 
 
-def merged_preset(preset: Preset, config: FitConfig) -> Preset:
-    """The preset with the values the configuration states instead of its own."""
-    return dataclasses.replace(
-        preset,
-        pixels_per_step=_given(config.data.batch_pixels, preset.pixels_per_step),
-        warm_steps=_given(config.schedule.warm_steps, preset.warm_steps),
-        event_weight=_given(config.model.event_weight, preset.event_weight),
-    )
-
-
-def _given(stated, preset_value):
-    """The stated value, or the preset's where none is stated (None)."""
-    return preset_value if stated is None else stated
-
-
 def frame_scale(data: TrainingData, config: FitConfig) -> Callable[[torch.Tensor], torch.Tensor]:
     """The scale frame values are compared on.
 
@@ -119,7 +102,8 @@ class Method:
         model: the model being trained.
         data: the training arrays.
         config: the fit configuration.
-        preset: the merged preset (:func:`merged_preset`).
+        preset: the scene's preset with the configuration's values
+            (:func:`~seenerf.train.builder.build_model`).
         device: torch device.
 
     Attributes:
@@ -131,7 +115,9 @@ class Method:
     refines_poses = True
 
     @classmethod
-    def training_frame(cls, data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
+    def training_frame(
+        cls, data: TrainingData, config: FitConfig, variant: Variant
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Poses the field is trained at and the scene's near / far depth in their frame."""
         return data.c2w, data.bounds
 
@@ -174,13 +160,15 @@ class RecordingMethod(Method):
     """
 
     @classmethod
-    def training_frame(cls, data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
+    def training_frame(
+        cls, data: TrainingData, config: FitConfig, variant: Variant
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The estimated latent poses and their bounds.
 
         Raises:
             ConfigError: the variant needs frames of several exposures and the session has one.
         """
-        if get_variant(config.model.variant).several_exposures:
+        if variant.several_exposures:
             if len(np.unique(data.exposure_s)) < 2:
                 raise ConfigError(
                     f"variant {config.model.variant} needs frames of at least two exposures; this "
@@ -256,7 +244,9 @@ class SharpTruthMethod(Method):
     refines_poses = False
 
     @classmethod
-    def training_frame(cls, data: TrainingData, config: FitConfig) -> tuple[np.ndarray, np.ndarray]:
+    def training_frame(
+        cls, data: TrainingData, config: FitConfig, variant: Variant
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The truth's poses, with the bounds rescaled into the truth's frame.
 
         (Estimated poses are known up to a similarity.)
@@ -315,9 +305,11 @@ def method_class(variant: Variant) -> type[Method]:
     """The method that trains ``variant``.
 
     Raises:
-        ConfigError: the variant names no known method.
+        OptionError: the variant names no known method (the message lists them).
     """
-    return by_name(METHODS, "method", variant.method)
+    if variant.method not in METHODS:
+        raise OptionError(f"unknown method {variant.method!r}; choose one of: {', '.join(METHODS)}")
+    return METHODS[variant.method]
 
 
 def make_method(

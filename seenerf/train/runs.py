@@ -20,7 +20,7 @@ from seenerf.eval.video import video_frames, write_video
 from seenerf.eval.views import render_views, write_views
 from seenerf.model.config import FitConfig, load_config
 from seenerf.model.model import SeeNerfModel
-from seenerf.model.variants import get_variant
+from seenerf.model.variants import VARIANTS
 from seenerf.train.builder import build_model, resolve_device, with_refined_poses
 from seenerf.train.checkpoint import load_model_state
 
@@ -54,7 +54,7 @@ def open_run(run_dir: Path | str) -> OpenRun:
     data = load_training_data(
         run_dir.parent.parent,
         int(bins),
-        sensor_from_truth=get_variant(config.model.variant).sensor_from_truth,
+        sensor_from_truth=VARIANTS[config.model.variant].sensor_from_truth,
         threshold=config.sensor.threshold,
     )
     model, _ = build_model(data, config, resolve_device(config.schedule.device))

@@ -16,7 +16,7 @@ from seenerf.model.config import FitConfig
 from seenerf.model.pose_correction import LEARNING_RATE as POSE_LEARNING_RATE
 from seenerf.train.builder import build_model, resolve_device
 from seenerf.train.checkpoint import load_checkpoint, save_checkpoint
-from seenerf.train.methods import make_method, merged_preset
+from seenerf.train.methods import make_method
 from seenerf.train.stopping import StopRequest, stop_requests
 from seenerf.train.threads import CoreWatch, limit_threads, threads_beside
 
@@ -114,13 +114,12 @@ class Trainer:
         spent_s: float = 0.0,
         on_step: Callable[[Trainer], None] | None = None,
     ):
-        self.data, self.config, self.run_dir, self.log = data, config.validate(), run_dir, log
+        self.data, self.config, self.run_dir, self.log = data, config, run_dir, log
         self.on_step = on_step
         limit_threads(config.schedule.threads)
         self.device = resolve_device(config.schedule.device)
         torch.manual_seed(config.schedule.seed)
-        self.model, preset = build_model(data, config, self.device)
-        self.preset = merged_preset(preset, config)
+        self.model, self.preset = build_model(data, config, self.device)
         self.generator = torch.Generator().manual_seed(config.schedule.seed)
         # A budget alone runs until it is spent or the held-out score stops rising (a plateau),
         # not to the preset's step count: that count only sets how far the rate falls.

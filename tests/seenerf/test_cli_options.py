@@ -2,8 +2,6 @@ import argparse
 import dataclasses
 from dataclasses import dataclass
 
-import pytest
-
 from seenerf.cli import fit_verb
 from seenerf.cli.options import (
     add_dataclass_options,
@@ -109,7 +107,7 @@ def test_fit_verb_keeps_its_option_names(tmp_path):
         time_budget_s=600.0,
         steps=7,
         device="cpu",
-        threshold=pytest.approx(0.35),
+        threshold=0.35,
         subframes=2,
         bins=6,
         low_pass="paper",

@@ -95,7 +95,7 @@ def test_subframes_below_one_are_refused():
     with pytest.raises(
         ConfigError, match="--subframes 0 is out of range: give a whole number from 1"
     ):
-        FitConfig.of(subframes=0).validate()
+        FitConfig.of(subframes=0)
 
 
 def test_batches_with_subframes_hold_the_latent_rays_at_every_mth_pose():

@@ -59,7 +59,7 @@ def test_the_event_weight_is_the_presets_unless_one_is_stated(preset, stated, us
     trainer = Trainer(tiny_scene, config, log=lambda line: None)
     assert trainer.preset.event_weight == used
     with pytest.raises(ConfigError, match="--event-weight -0.1 is out of range"):
-        FitConfig.of(event_weight=-0.1).validate()
+        FitConfig.of(event_weight=-0.1)
 
 
 def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked():
@@ -159,9 +159,9 @@ def test_oracle_validation_scores_its_own_sharp_hdr_supervision():
 
 def test_unknown_names_list_the_known_ones():
     with pytest.raises(ConfigError, match="full"):
-        _config(variant="nope").validate()
+        _config(variant="nope")
     with pytest.raises(ConfigError, match="fast"):
-        _config(preset="nope").validate()
+        _config(preset="nope")
 
 
 def test_field_resolution_follows_the_pixel_span_within_its_bounds():
@@ -303,10 +303,12 @@ def test_oracle_bounds_follow_the_truth_frame_not_the_estimated_one():
     estimated = scene.c2w.copy()
     estimated[..., :3, 3] *= 10.0  # the reconstruction's frame: ten times the truth's scale
     scene.c2w, scene.bounds = estimated, scene.bounds * 10.0
-    poses, bounds = SharpTruthMethod.training_frame(scene, _config(variant="oracle"))
+    poses, bounds = SharpTruthMethod.training_frame(
+        scene, _config(variant="oracle"), VARIANTS["oracle"]
+    )
     np.testing.assert_allclose(bounds, [1.0, 3.0], rtol=1e-4)  # plane_scene's true bounds
     assert poses is scene.truth.c2w
-    _, estimated_bounds = RecordingMethod.training_frame(scene, _config())
+    _, estimated_bounds = RecordingMethod.training_frame(scene, _config(), VARIANTS["full"])
     np.testing.assert_allclose(estimated_bounds, [10.0, 30.0])
 
 
