@@ -20,29 +20,12 @@ from seenerf.render.frustum import forward_facing_space, frustum_box
 from seenerf.render.rays import in_any_view, scene_box_from_cameras
 from seenerf.render.renderer import RadianceRenderer
 from seenerf.sensors.rgb_crf import LinearCrf, RgbCrf, TabulatedCrf
-from seenerf.train.methods import method_class
 
 __all__ = [
     "build_model",
-    "resolve_device",
     "rgb_response",
     "with_refined_poses",
 ]
-
-
-def resolve_device(name: str) -> str:
-    """``auto`` becomes ``cuda`` when a CUDA device is present, else ``cpu``.
-
-    Raises:
-        ConfigError: ``cuda`` was asked for and none is present.
-    """
-    if name == "auto":
-        return "cuda" if torch.cuda.is_available() else "cpu"
-    if name == "cuda" and not torch.cuda.is_available():
-        raise ConfigError(
-            "device cuda was requested but torch sees no CUDA device; use --device cpu"
-        )
-    return name
 
 
 def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.Module | None:
@@ -84,14 +67,18 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
     return crf(**anchor)
 
 
-def build_model(data: TrainingData, config: FitConfig, device: str) -> tuple[SeeNerfModel, Preset]:
+def build_model(
+    data: TrainingData, config: FitConfig, device: str, method: type
+) -> tuple[SeeNerfModel, Preset]:
     """The model, and its preset with the configuration's values, its field sized for this scene.
 
     The field's resolution follows the scene's extent on the sensor (:func:`size_field`).
+    ``method`` is the class of the method that will train it
+    (:func:`seenerf.train.methods.method_class`): it states the frame the field is trained in
+    and whether the poses may be refined.
     """
     variant = VARIANTS[config.model.variant]
     crf = rgb_response(variant.crf, data, config)
-    method = method_class(variant)
     poses, bounds = method.training_frame(data, config, variant)
     preset = PRESETS[config.model.preset]
     space = (

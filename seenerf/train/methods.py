@@ -24,7 +24,8 @@ from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.pose_correction import PRIOR_WEIGHT as POSE_PRIOR_WEIGHT
 from seenerf.model.presets import Preset
-from seenerf.model.variants import Variant
+from seenerf.model.variants import VARIANTS, Variant
+from seenerf.train.builder import build_model
 from seenerf.train.losses import (
     event_loss,
     hdr_tone_map,
@@ -312,8 +313,8 @@ def method_class(variant: Variant) -> type[Method]:
     return METHODS[variant.method]
 
 
-def make_method(
-    model: SeeNerfModel, data: TrainingData, config: FitConfig, preset: Preset, device: str
-) -> Method:
-    """The method of the model's variant, made for this fit."""
-    return method_class(model.variant)(model, data, config, preset, device)
+def make_method(data: TrainingData, config: FitConfig, device: str) -> Method:
+    """The method of the configuration's variant, with the model it trains built for this scene."""
+    method = method_class(VARIANTS[config.model.variant])
+    model, preset = build_model(data, config, device, method)
+    return method(model, data, config, preset, device)

@@ -21,8 +21,10 @@ from seenerf.eval.views import render_views, write_views
 from seenerf.model.config import FitConfig, load_config
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.variants import VARIANTS
-from seenerf.train.builder import build_model, resolve_device, with_refined_poses
+from seenerf.train.builder import build_model, with_refined_poses
 from seenerf.train.checkpoint import load_model_state
+from seenerf.train.methods import method_class
+from seenerf.train.threads import resolve_device
 
 __all__ = ["OpenRun", "evaluate_run", "open_run", "orbit_poses", "read_path", "render_run"]
 
@@ -51,13 +53,15 @@ def open_run(run_dir: Path | str) -> OpenRun:
         )
     config = load_config(run_dir / "config.json")
     bins = json.loads((run_dir / "config.json").read_text()).get("bins", config.data.bins)
+    variant = VARIANTS[config.model.variant]
     data = load_training_data(
         run_dir.parent.parent,
         int(bins),
-        sensor_from_truth=VARIANTS[config.model.variant].sensor_from_truth,
+        sensor_from_truth=variant.sensor_from_truth,
         threshold=config.sensor.threshold,
     )
-    model, _ = build_model(data, config, resolve_device(config.schedule.device))
+    device = resolve_device(config.schedule.device)
+    model, _ = build_model(data, config, device, method_class(variant))
     load_model_state(run_dir / "checkpoint.pt", model)
     return OpenRun(run_dir, model, with_refined_poses(data, model), config)
 

@@ -14,11 +14,10 @@ from seenerf.data.arrays import TrainingData
 from seenerf.errors import TrainingDataError, TrainingStopped
 from seenerf.model.config import FitConfig
 from seenerf.model.pose_correction import LEARNING_RATE as POSE_LEARNING_RATE
-from seenerf.train.builder import build_model, resolve_device
 from seenerf.train.checkpoint import load_checkpoint, save_checkpoint
 from seenerf.train.methods import make_method
 from seenerf.train.stopping import StopRequest, stop_requests
-from seenerf.train.threads import CoreWatch, limit_threads, threads_beside
+from seenerf.train.threads import CoreWatch, limit_threads, resolve_device, threads_beside
 
 __all__ = ["TrainSummary", "Trainer", "TrainingProgress"]
 
@@ -119,7 +118,8 @@ class Trainer:
         limit_threads(config.schedule.threads)
         self.device = resolve_device(config.schedule.device)
         torch.manual_seed(config.schedule.seed)
-        self.model, self.preset = build_model(data, config, self.device)
+        self.method = make_method(data, config, self.device)
+        self.model, self.preset = self.method.model, self.method.preset
         self.generator = torch.Generator().manual_seed(config.schedule.seed)
         # A budget alone runs until it is spent or the held-out score stops rising (a plateau),
         # not to the preset's step count: that count only sets how far the rate falls.
@@ -129,7 +129,6 @@ class Trainer:
             budgeted = config.schedule.time_budget_s is not None
             self.total_steps = math.inf if budgeted else self.preset.steps
         self.spent_s = spent_s
-        self.method = make_method(self.model, data, config, self.preset, self.device)
         automatic = config.schedule.threads is None and self.device == "cpu"
         self.core_watch = CoreWatch() if automatic else None
         self.cores_looked_at = time.perf_counter()

@@ -8,8 +8,9 @@ import torch
 
 from seenerf.model.config import FitConfig
 from seenerf.model.pose_correction import PoseCorrection, rotation_matrices
-from seenerf.train.builder import build_model, with_refined_poses
+from seenerf.train.builder import with_refined_poses
 from seenerf.train.checkpoint import load_model_state
+from seenerf.train.methods import make_method
 from seenerf.train.trainer import Trainer
 
 
@@ -56,13 +57,13 @@ def test_training_refines_the_poses_and_a_saved_run_keeps_them(tiny_scene, tmp_p
     assert "poses" in trainer.last_terms
     refined = with_refined_poses(tiny_scene, trainer.model)
     assert not np.allclose(refined.c2w, tiny_scene.c2w)
-    model, _ = build_model(tiny_scene, _config(), "cpu")
+    model = make_method(tiny_scene, _config(), "cpu").model
     load_model_state(tmp_path / "checkpoint.pt", model)
     np.testing.assert_array_equal(with_refined_poses(tiny_scene, model).c2w, refined.c2w)
 
 
 def test_without_refinement_or_for_the_oracle_the_poses_are_as_given(tiny_scene):
-    plain, _ = build_model(tiny_scene, _config(refine_poses=False), "cpu")
+    plain = make_method(tiny_scene, _config(refine_poses=False), "cpu").model
     assert plain.pose_correction is None and with_refined_poses(tiny_scene, plain) is tiny_scene
-    oracle, _ = build_model(tiny_scene, _config(variant="oracle"), "cpu")
+    oracle = make_method(tiny_scene, _config(variant="oracle"), "cpu").model
     assert oracle.pose_correction is None  # trained at the true poses

@@ -9,9 +9,8 @@ from seenerf.errors import CheckpointError, ConfigError
 from seenerf.model.config import FitConfig
 from seenerf.model.presets import PRESETS, size_field
 from seenerf.model.variants import VARIANTS
-from seenerf.train.builder import build_model
 from seenerf.train.losses import NOISE_REFERENCE, event_loss, noise_even
-from seenerf.train.methods import frame_scale
+from seenerf.train.methods import frame_scale, make_method
 from seenerf.train.trainer import Trainer
 
 
@@ -67,14 +66,14 @@ def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked(
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
     scene.linear_levels = (0.02, 0.9)
-    model, _ = build_model(scene, _config(), "cpu")  # response "auto" by default
+    model = make_method(scene, _config(), "cpu").model  # response "auto" by default
     assert isinstance(model.crf, LinearCrf) and model.crf.black == 0.02
-    assert isinstance(build_model(scene, _config(response="learned"), "cpu")[0].crf, RgbCrf)
-    assert isinstance(build_model(scene, _config(variant="power-crf"), "cpu")[0].crf, PowerCrf)
+    assert isinstance(make_method(scene, _config(response="learned"), "cpu").model.crf, RgbCrf)
+    assert isinstance(make_method(scene, _config(variant="power-crf"), "cpu").model.crf, PowerCrf)
     trainer = Trainer(scene, _config(), log=lambda line: None)
     assert trainer.train().skipped_steps == 0
     scene.linear_levels = None
-    assert isinstance(build_model(scene, _config(), "cpu")[0].crf, RgbCrf)
+    assert isinstance(make_method(scene, _config(), "cpu").model.crf, RgbCrf)
 
 
 @pytest.mark.parametrize(
@@ -192,7 +191,7 @@ def test_checkpoint_of_another_model_is_a_typed_error(tiny_scene, tmp_path):
     from seenerf.train.checkpoint import load_model_state
 
     Trainer(tiny_scene, _config(steps=1), tmp_path, log=lambda line: None).train()
-    other, _ = build_model(tiny_scene, _config(variant="base"), "cpu")
+    other = make_method(tiny_scene, _config(variant="base"), "cpu").model
     with pytest.raises(CheckpointError, match=r"(?s)do not fit this version's model.*--fresh"):
         load_model_state(tmp_path / "checkpoint.pt", other)
 
@@ -316,7 +315,7 @@ def test_oracle_ldr_views_use_the_true_response():
     from seenerf.data.synthetic import true_response
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
-    model, _ = build_model(scene, _config(variant="oracle"), "cpu")
+    model = make_method(scene, _config(variant="oracle"), "cpu").model
     log_radiance = torch.tensor([[-4.0, -2.0, 1.5]])
     expected = true_response(np.array([-4.0, -2.0, 1.5]) + np.log(0.064))
     np.testing.assert_allclose(
@@ -326,7 +325,7 @@ def test_oracle_ldr_views_use_the_true_response():
 
 def test_whole_image_ldr_matches_the_response_per_pixel():
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
-    model, _ = build_model(scene, _config(), "cpu")
+    model = make_method(scene, _config(), "cpu").model
     with torch.no_grad():
         model.crf.weight_in.mul_(4.0)  # kinks steeper than the warm start's
     log_radiance = torch.linspace(-12.0, 6.0, 6000).reshape(2000, 3)
