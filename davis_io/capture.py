@@ -42,7 +42,8 @@ class CaptureRequest:
     """What to record from, as given on the command line.
 
     Attributes:
-        exposure_us: APS exposure to apply, µs (required for a camera; replay ignores it).
+        exposure_us: APS exposure to apply, µs (required for a camera); for a replay, the
+            exposure of frames the file states none for.
         frame_interval_us: time between frame starts, µs (None: exposure + 50 ms).
         frames: frames to record (None: until stopped, or all of a replay / emulation).
         serial: camera serial number (None: the only camera attached).
@@ -186,6 +187,7 @@ def record_capture(request: CaptureRequest, out_dir: Path, **options) -> Recordi
         source,
         out_dir,
         exposure_us=request.applied_exposure_us,
+        unstated_exposure_us=request.exposure_us,
         frames=request.frames,
         **options,
     )

@@ -60,8 +60,14 @@ class ScaleProfile:
     rise: np.ndarray
 
     def interval(self, rise: float = PINNED_RISE) -> tuple[float, float]:
-        """The smallest and largest scale whose disagreement rises less than ``rise``."""
+        """The smallest and largest scale whose disagreement rises less than ``rise``.
+
+        Every scale where no disagreement is finite (not even the fit's): nothing tells them
+        apart.
+        """
         inside = self.scales[self.rise < rise]
+        if not len(inside):
+            inside = self.scales
         return float(inside.min()), float(inside.max())
 
     @property

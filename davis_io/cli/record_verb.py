@@ -25,7 +25,11 @@ STILL_FRAMES = Bounds(0, 10_000, "frames", integer=True)
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the options of ``seecap record``."""
-    parser.add_argument("--exposure", help="APS exposure: seconds (0.15), 150ms or 150000us")
+    parser.add_argument(
+        "--exposure",
+        help="APS exposure: seconds (0.15), 150ms or 150000us; with --replay, the exposure of "
+        "frames the file states none for (default: half the time to the next frame)",
+    )
     parser.add_argument("--out", type=Path, help="session folder (default: session-<UTC time>)")
     limit = parser.add_mutually_exclusive_group()
     limit.add_argument(
@@ -143,11 +147,6 @@ def run(args: argparse.Namespace) -> int:
         exposure_steps=args.auto_exposure,
         lens=args.lens,
     )
-    if args.replay is not None and args.exposure is not None:
-        print(
-            "seecap record: --exposure is ignored with --replay (the file's exposure is measured)",
-            file=sys.stderr,
-        )
     out_dir = args.out or Path(default_session_name())
     printer = _StatusPrinter()
     result = record_capture(
@@ -162,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
     )
     if printer.live:
         print(file=sys.stderr)  # end the status line
+    printer.warn(result.warnings[printer.warned :])  # those of the recording's end
     print(_summary(result))
     if result.stop_signal:
         return 128 + result.stop_signal
@@ -189,12 +189,18 @@ class _StatusPrinter:
     def __init__(self):
         self.live = sys.stderr.isatty()
         self.logged_at = -self.LOG_INTERVAL_S
+        self.warned = 0
+
+    def warn(self, warnings: list[str]) -> None:
+        """Print each warning on a line of its own."""
+        for warning in warnings:
+            print(("\r\033[K" if self.live else "") + f"warning: {warning}", file=sys.stderr)
+        self.warned += len(warnings)
 
     def __call__(self, status) -> None:
         from davis_io.session.status import format_status_line
 
-        for warning in status.warnings:
-            print(("\r\033[K" if self.live else "") + f"warning: {warning}", file=sys.stderr)
+        self.warn(status.warnings)
         line = format_status_line(status)
         if self.live:
             print(f"\r\033[K{line}", end="", file=sys.stderr, flush=True)
@@ -207,6 +213,7 @@ def _summary(result) -> str:
     manifest = result.manifest
     requested = manifest.exposure_requested_us
     measured = manifest.exposure_measured_us
+    assumed = manifest.exposure_assumed_us
     lines = [
         f"session   {result.folder} ({manifest.status}"
         + (f": {manifest.stop_reason})" if manifest.stop_reason else ")"),
@@ -215,7 +222,8 @@ def _summary(result) -> str:
         "exposure  applied "
         + (f"{requested / 1000:.3f} ms" if requested is not None else "- (from the file)")
         + "   measured (median) "
-        + (f"{measured / 1000:.3f} ms" if measured is not None else "- (no frame)"),
+        + (f"{measured / 1000:.3f} ms" if measured is not None else "- (no frame)")
+        + (f"   assumed {assumed / 1000:.3f} ms (not stated)" if assumed is not None else ""),
         f"drops     {manifest.drops.total_events} events, {manifest.drops.queue_frames} frames; "
         f"{manifest.drops.frames_events_lost} frames flagged for lost events",
     ]

@@ -110,6 +110,7 @@ def _summary(session: Session) -> dict:
         "events": session.event_count,
         "exposure_requested_us": manifest.exposure_requested_us,
         "exposure_measured_us": _median(table.exposure_us),
+        "exposure_assumed_us": manifest.exposure_assumed_us,
         "exposure_range_us": _range(table.exposure_us),
         "frames_events_lost": int(table.events_lost.sum()),
         "event_gaps": _gaps(session.event_gaps()),

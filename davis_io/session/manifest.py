@@ -77,6 +77,8 @@ class SessionManifest:
         device_config: device configuration and biases as reported by the source.
         exposure_requested_us: exposure asked for on the command line (None: not set).
         exposure_measured_us: median exposure of the recorded frames (None: no frame).
+        exposure_assumed_us: median exposure given to frames whose source stated none
+            (:mod:`davis_io.session.unstated_exposure`); None: every frame stated its own.
         start_time_utc: ISO 8601 UTC wall-clock time the recording started.
         stop_time_utc: ISO 8601 UTC wall-clock time it stopped ("" while recording).
         status: ``"recording"``, ``"complete"`` or ``"interrupted"``.
@@ -107,6 +109,7 @@ class SessionManifest:
     device_config: dict = field(default_factory=dict)
     exposure_requested_us: int | None = None
     exposure_measured_us: int | None = None
+    exposure_assumed_us: int | None = None
     start_time_utc: str = ""
     stop_time_utc: str = ""
     status: str = STATUS_RECORDING
@@ -213,6 +216,7 @@ _VALUE_BOUNDS = {
     "event_count": _COUNT,
     "exposure_requested_us": _DURATION_US,
     "exposure_measured_us": _DURATION_US,
+    "exposure_assumed_us": _DURATION_US,
 }
 """The values each numeric field of ``session.json`` may hold (None aside, where allowed)."""
 

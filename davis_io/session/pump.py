@@ -19,6 +19,7 @@ from davis_io.session.event_order import EventOrder
 from davis_io.session.manifest import DropCounters
 from davis_io.session.status import frame_warnings
 from davis_io.session.sync import ClosedWindow, ExposureSync
+from davis_io.session.unstated_exposure import UnstatedExposures
 from davis_io.session.writer import SessionWriter
 from davis_io.types import Packet, PacketSource, empty_events
 
@@ -62,6 +63,8 @@ class Progress:
     """Event-free stretches long enough to be gaps (:func:`davis_io.gaps.long_intervals`)."""
     gyro: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
     """The IMU's times and gyro readings, to tell a still camera from lost events."""
+    unstated: UnstatedExposures = field(default_factory=UnstatedExposures)
+    """Gives the frames that state no exposure an assumed one, and keeps what it assumed."""
 
     def event_gaps(self, event_count: int) -> np.ndarray:
         """The gaps of the stream so far (:func:`davis_io.gaps.event_gaps`, minus still ones)."""
@@ -168,7 +171,8 @@ def write_packets(
     """Writer thread: store every packet, bin frames as their windows close, stop at the limits.
 
     With ``defer_when_busy`` (a live source whose packets are dropped when the queue is full),
-    binning waits while the queue fills up, so that storing the stream keeps up.
+    binning waits while the queue fills up, so that storing the stream keeps up. A frame that
+    states no exposure is given one (``progress.unstated``).
     """
     state = _WriterState(writer, sync, progress, max_frames, duration_us)
     if defer_when_busy:
@@ -209,6 +213,7 @@ class _WriterState:
 
     def __init__(self, writer, sync, progress, max_frames, duration_us):
         self.writer, self.sync, self.progress = writer, sync, progress
+        self.unstated = progress.unstated
         self.max_frames, self.duration_us = max_frames, duration_us
         self.frames_accepted = 0
         self.last_flush = time.monotonic()
@@ -235,7 +240,8 @@ class _WriterState:
         self.writer.write_triggers(packet.triggers)
         for frame in packet.frames:
             if self.max_frames is None or self.frames_accepted < self.max_frames:
-                self.sync.add_frame(frame)
+                for ready in self.unstated.accept(frame):
+                    self.sync.add_frame(ready)
                 self.frames_accepted += 1
         self._submit(self.sync.settle())
         self._store(wait=False)
@@ -247,6 +253,8 @@ class _WriterState:
     def finish(self) -> None:
         """Store the last events and every waiting frame (flagged when its window was cut)."""
         self._add_events(self.order.finish())
+        for ready in self.unstated.finish():
+            self.sync.add_frame(ready)
         note = self.order.note()
         if note is not None:
             self.progress.source_notes.append(note)

@@ -31,6 +31,7 @@ from davis_io.session.preview import preview_image, write_preview
 from davis_io.session.pump import Outcome, Progress, read_source, write_packets
 from davis_io.session.status import RecordingStatus
 from davis_io.session.sync import ExposureSync
+from davis_io.session.unstated_exposure import UnstatedExposures
 from davis_io.session.writer import MIN_FREE_BYTES, SessionWriter
 from davis_io.types import PacketSource
 
@@ -89,6 +90,7 @@ def record(
     drop_when_full: bool | None = None,
     queue_packets: int = _QUEUE_PACKETS,
     camera_calibration: Path | None = None,
+    unstated_exposure_us: int | None = None,
 ) -> RecordingResult:
     """Record ``source`` into a new session folder.
 
@@ -112,6 +114,8 @@ def record(
         queue_packets: queue capacity in packets.
         camera_calibration: the camera's lens calibration file, stored in ``session.json``
             (read before anything is recorded: a file that cannot serve refuses the start).
+        unstated_exposure_us: the exposure of frames whose source states none, µs (None:
+            assumed from the frame interval; :mod:`davis_io.session.unstated_exposure`).
 
     Returns:
         The result; its manifest says ``complete`` or ``interrupted`` (Ctrl-C).
@@ -132,7 +136,7 @@ def record(
         if camera_calibration is not None:
             lens = read_camera_calibration(camera_calibration, manifest.width, manifest.height)
             manifest = dataclasses.replace(manifest, lens=lens.to_json())
-        run = _Run(source, folder, manifest, queue_packets)
+        run = _Run(source, folder, manifest, queue_packets, unstated_exposure_us)
         write_manifest(folder, manifest)
         if drop_when_full is None:
             drop_when_full = source.info.origin == "usb"
@@ -172,12 +176,19 @@ def _signals_stop(run: _Run):
 class _Run:
     """One recording in progress: threads, queue, writer and the shared counters."""
 
-    def __init__(self, source, folder: Path, manifest: SessionManifest, queue_packets: int):
+    def __init__(
+        self,
+        source,
+        folder: Path,
+        manifest: SessionManifest,
+        queue_packets: int,
+        unstated_exposure_us: int | None,
+    ):
         self.source, self.folder, self.manifest = source, folder, manifest
         self.packets: queue.Queue = queue.Queue(maxsize=queue_packets)
         self.stop = threading.Event()
         self.outcome = Outcome()
-        self.progress = Progress()
+        self.progress = Progress(unstated=UnstatedExposures(unstated_exposure_us))
         self.stop_signal = 0
         self.writer = SessionWriter(
             folder / H5_NAME, width=manifest.width, height=manifest.height, b=manifest.b
@@ -278,6 +289,9 @@ class _Run:
         manifest.event_count = self.writer.events_written
         manifest.drops = self.progress.drops
         manifest.exposure_measured_us = self.progress.exposure_measured_us
+        manifest.exposure_assumed_us = self.progress.unstated.median_us
+        if manifest.exposure_assumed_us is not None:
+            self.progress.warnings.append(self._assumed_exposure_warning())
         manifest.stop_time_utc = datetime.now(UTC).isoformat(timespec="seconds")
         manifest.source_notes = list(self.progress.source_notes)
         manifest.event_gaps_us = self.progress.event_gaps(self.writer.events_written).tolist()
@@ -311,6 +325,20 @@ class _Run:
             f"The session {self.folder} was closed and marked interrupted; its "
             f"{self.writer.frames_written} frames and {self.writer.events_written} events are "
             "readable."
+        )
+
+    def _assumed_exposure_warning(self) -> str:
+        unstated = self.progress.unstated
+        how = (
+            "the exposure given with --exposure"
+            if unstated.given_us is not None
+            else "half the time to the next frame"
+        )
+        return (
+            f"{len(unstated.assumed_us)} frames state no exposure (its start and end "
+            f"alike): each was given one from its start, {how} (median "
+            f"{unstated.median_us / 1000:.1f} ms), stored as assumed in session.json; record "
+            "again with --exposure to give the real one"
         )
 
     def _stop_reason(self) -> str:

@@ -44,3 +44,10 @@ def test_a_rise_between_the_measured_and_the_width_levels_pins_the_scale_widely(
 def test_a_rise_of_one_percent_at_root_two_leaves_the_scale_free():
     # 16 ms exposures rose 0.9-1.2 % there, at a minimum 2.2 times the true scale.
     assert not _profile(4 * 0.012).pinned
+
+
+def test_a_profile_without_one_finite_disagreement_leaves_the_scale_free():
+    # Frames of zero exposure: the disagreement is NaN at the fit, so every rise is too.
+    profile = ScaleProfile(SCALES, np.full(len(SCALES), np.nan))
+    assert profile.interval() == pytest.approx((SCALES[0], SCALES[-1]))
+    assert not profile.pinned

@@ -40,12 +40,13 @@ def replay_session(tmp_path, aestream_aedat4, capsys):
 
 def test_record_replay_prints_applied_and_measured_exposure(replay_session):
     folder, captured = replay_session
-    assert "--exposure is ignored with --replay" in captured.err
+    assert "assumed" not in captured.out  # --exposure serves only frames that state none
     assert "measured (median) 4.773 ms" in captured.out
     assert "applied - (from the file)" in captured.out
     manifest = read_manifest(folder)
     assert manifest.source == "replay:davis346-aestream.aedat4"
     assert manifest.exposure_requested_us is None and manifest.exposure_measured_us == 4_773
+    assert manifest.exposure_assumed_us is None
 
 
 def test_existing_session_needs_overwrite(replay_session, aestream_aedat4, capsys):
