@@ -538,7 +538,7 @@ def _reviewed_response(
     is_linear = straightness < LINEAR_RMS
     progress(
         f"response {'linear' if is_linear else 'not linear'}: the free curve is a power "
-        f"{power:.2f} of v - {black:.3f} to {straightness:.3f} RMS"
+        f"{power:.2f} of v {'-' if black >= 0 else '+'} {abs(black):.3f} to {straightness:.3f} RMS"
     )
     if is_linear and pile_up is None and not BLACK_LEVEL.holds(black):
         notes.add(
