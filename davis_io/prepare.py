@@ -62,6 +62,13 @@ def prepare_session(
         lens = None
         if camera_calibration is not None:
             lens = read_camera_calibration(camera_calibration, session.width, session.height)
+        assumed_us = session.manifest.exposure_assumed_us
+        if assumed_us is not None:
+            log(
+                f"exposures assumed: the recording's frames state none, so each was given "
+                f"{assumed_us / 1000:.1f} ms (median) when recorded (`seecap inspect` says so; "
+                "record again with --exposure to give the real one)"
+            )
         if session.calibration() is None:
             log("measuring the sensor from the recording")
             calibration = session_calibration(session, progress=log)

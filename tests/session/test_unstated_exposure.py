@@ -84,3 +84,24 @@ def test_a_replayed_file_without_exposures_is_binned_over_the_assumed_ones(
             inside = session.events_between(start, start + assumed_us)
             assert bins.event_count[k] == len(inside) > 0
     assert dataclasses.asdict(result.manifest)["exposure_assumed_us"] == assumed_us
+
+
+class _Stopped(Exception):
+    pass
+
+
+def test_the_preparation_of_a_fit_says_the_exposures_were_assumed(tmp_path, monkeypatch):
+    import davis_io.prepare as prepare
+
+    path = _recording(tmp_path / "no-exposure.aedat4")
+    result = record_capture(CaptureRequest(replay=path), tmp_path / "session", bins=2)
+
+    def calibration_stops(*args, **kwargs):
+        raise _Stopped
+
+    monkeypatch.setattr(prepare, "session_calibration", calibration_stops)
+    lines = []
+    with pytest.raises(_Stopped):
+        prepare.prepare_session(result.folder, 2, log=lines.append)
+    assert lines[0].startswith("exposures assumed: the recording's frames state none")
+    assert "50.0 ms (median)" in lines[0]
