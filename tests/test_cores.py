@@ -1,5 +1,7 @@
 """The cores davis_io's thread pools use, and a fit's --threads reaching them."""
 
+from types import SimpleNamespace
+
 import pytest
 
 from davis_io import prepare
@@ -31,6 +33,7 @@ def test_preparing_a_session_keeps_its_stages_to_the_threads_given(monkeypatch, 
 
     class NoCalibration:
         width = height = 4
+        manifest = SimpleNamespace(exposure_assumed_us=None)
 
         def __init__(self, _folder):
             pass
