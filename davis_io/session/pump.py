@@ -239,10 +239,10 @@ class _WriterState:
         self.writer.write_imu(packet.imu)
         self.writer.write_triggers(packet.triggers)
         for frame in packet.frames:
-            if self.max_frames is None or self.frames_accepted < self.max_frames:
-                for ready in self.unstated.accept(frame):
-                    self.sync.add_frame(ready)
-                self.frames_accepted += 1
+            within = self.max_frames is None or self.frames_accepted < self.max_frames
+            for ready in (self.unstated.accept if within else self.unstated.released_by)(frame):
+                self.sync.add_frame(ready)
+            self.frames_accepted += within
         self._submit(self.sync.settle())
         self._store(wait=False)
         if time.monotonic() - self.last_flush > _FLUSH_INTERVAL_S:

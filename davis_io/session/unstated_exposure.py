@@ -45,11 +45,7 @@ class UnstatedExposures:
 
     def accept(self, frame: Frame) -> list[Frame]:
         """The frames ready to go on: a held one first, then ``frame`` unless it is held."""
-        ready = []
-        if self._held is not None:
-            half_us = (frame.exposure_start_us - self._held.exposure_start_us) // 2
-            ready.append(self._assumed(self._held, half_us if half_us > 0 else self._earlier()))
-            self._held = None
+        ready = self.released_by(frame)
         if frame.exposure_end_us > frame.exposure_start_us:
             ready.append(frame)
         elif self.given_us is not None:
@@ -57,6 +53,17 @@ class UnstatedExposures:
         else:
             self._held = frame
         return ready
+
+    def released_by(self, frame: Frame) -> list[Frame]:
+        """The held frame, if any, now that the next frame's start is known.
+
+        ``frame`` itself goes no further (a frame past the recording's limit).
+        """
+        if self._held is None:
+            return []
+        held, self._held = self._held, None
+        half_us = (frame.exposure_start_us - held.exposure_start_us) // 2
+        return [self._assumed(held, half_us if half_us > 0 else self._earlier())]
 
     def finish(self) -> list[Frame]:
         """The frame still held, if any, with the exposure of the one before it."""

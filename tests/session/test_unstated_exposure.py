@@ -53,15 +53,15 @@ def test_a_lone_frame_and_a_frame_at_the_same_start_take_the_fallback():
     assert second.exposure_end_us - second.exposure_start_us == LONE_FRAME_US
 
 
-def _recording(path, count=4, interval_us=100_000):
+def _recording(path, starts_us=(0, 100_000, 200_000, 300_000)):
     rng = np.random.default_rng(3)
     packets = []
-    for k in range(count):
+    for start, end in zip(starts_us, (*starts_us[1:], starts_us[-1] + 100_000), strict=True):
         events = np.zeros(200, EVENT_DTYPE)
-        events["t"] = k * interval_us + np.sort(rng.integers(0, interval_us, 200))
+        events["t"] = start + np.sort(rng.integers(0, end - start, 200))
         events["x"], events["y"] = rng.integers(0, 5, 200), rng.integers(0, 4, 200)
         events["p"] = rng.choice([-1, 1], 200)
-        packets.append(Packet(events=events, frames=[_frame(k * interval_us)]))
+        packets.append(Packet(events=events, frames=[_frame(start)]))
     info = SourceInfo(camera="DAVIS346", serial="1", width=5, height=4)
     return write_aedat4(packets, path, info)
 
@@ -105,3 +105,12 @@ def test_the_preparation_of_a_fit_says_the_exposures_were_assumed(tmp_path, monk
         prepare.prepare_session(result.folder, 2, log=lines.append)
     assert lines[0].startswith("exposures assumed: the recording's frames state none")
     assert "50.0 ms (median)" in lines[0]
+
+
+def test_the_last_frame_within_a_limit_is_released_by_the_next_ones_start(tmp_path):
+    path = _recording(tmp_path / "no-exposure.aedat4", (0, 100_000, 300_000, 400_000))
+    result = record_capture(CaptureRequest(replay=path, frames=2), tmp_path / "session", bins=2)
+    with Session.open(result.folder) as session:
+        assert session.frame_count == 2
+        # Half of 100 ms, then half of the 200 ms to the third frame, which is not recorded.
+        np.testing.assert_array_equal(session.frames_table().exposure_us, [50_000, 100_000])
