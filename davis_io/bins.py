@@ -233,7 +233,8 @@ def _check_pixels(window: np.ndarray, width: int, height: int) -> None:
     if len(window) and (window["x"].max() >= width or window["y"].max() >= height):
         raise BinningError(
             f"events reach x={int(window['x'].max())}, y={int(window['y'].max())} on a "
-            f"{width}x{height} sensor: pass the sensor size of the recording"
+            f"{width}x{height} sensor: the events and the sensor size stated for them disagree "
+            "(a damaged file, or the size of another sensor); check the recording's stated size"
         )
 
 
