@@ -258,6 +258,7 @@ class _WriterState:
         note = self.order.note()
         if note is not None:
             self.progress.source_notes.append(note)
+            self.progress.warnings.append(f"event times: {note} (stored in session.json)")
         self._submit(self.sync.settle(final=True))
         self._store(wait=True)
         self.writer.flush()

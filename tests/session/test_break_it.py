@@ -278,6 +278,29 @@ def test_a_glitch_at_a_packets_end_is_judged_by_the_next_packet():
     assert len(first) == 200 and len(second) == 200 and order.dropped == 0
 
 
+def test_a_stream_out_of_order_by_a_little_everywhere_keeps_every_event_but_its_glitches():
+    from davis_io.session.event_order import EventOrder
+    from davis_io.types import EVENT_DTYPE
+
+    rng = np.random.default_rng(3)
+    count = 30_000
+    events = np.zeros(count, EVENT_DTYPE)
+    # 3 events per µs, each stamped up to 50 µs early or late; packets cut across the jitter.
+    events["t"] = 1_000 + np.arange(count) // 3 + rng.integers(-50, 51, count)
+    events["x"] = np.arange(count) % 346
+    events["t"][12_000] = 10**9  # a glitch far ahead
+    events["t"][25_000] = 7  # and one far back
+    order = EventOrder()
+    packets = np.split(events, [8_000, 16_000, 24_000])
+    kept = np.concatenate([*(order.accept(packet) for packet in packets), order.finish()])
+    assert np.all(np.diff(kept["t"]) >= 0)
+    assert order.dropped == 2 and len(kept) == count - 2
+    expected = np.delete(events, [12_000, 25_000])
+    assert np.array_equal(np.sort(kept, order=["t", "x"]), np.sort(expected, order=["t", "x"]))
+    assert order.reordered > count // 2
+    assert "out of order back in time order" in order.note() and "dropped 2 events" in order.note()
+
+
 def _aedat2_with_flipped_time_bytes(path, count, share, seed=1):
     """DVS events of a DAVIS346 as AEDAT 2.0 records; ``share`` of them get one time bit flipped."""
     header = (
@@ -309,6 +332,7 @@ def test_one_percent_of_corrupted_times_keeps_98_percent_of_the_events(tmp_path)
         assert session.event_count >= 98_000 and np.all(np.diff(times) >= 0)
         assert 0 < 100_000 - session.event_count <= 1_000
         assert any("timestamp glitches" in note for note in session.manifest.source_notes)
+    assert any("timestamp glitches" in warning for warning in result.warnings)
 
 
 def test_a_writer_waits_for_a_reader_instead_of_losing_its_work(session):
