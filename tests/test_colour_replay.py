@@ -5,6 +5,7 @@ import shutil
 
 import cv2
 import numpy as np
+import pytest
 
 from davis_io.aedat.aedat4_write import write_aedat4
 from davis_io.cli import main
@@ -13,7 +14,7 @@ from davis_io.emulator import EmulatedCamera
 from davis_io.prepare import prepare_session
 from davis_io.session import Session
 from davis_io.session.recorder import record
-from davis_io.types import ColorFilter, Packet, SourceInfo
+from davis_io.types import ColorFilter, Frame, Packet, SourceInfo
 from seenerf.model.config import FitConfig
 from seenerf.train import fit_session
 
@@ -56,3 +57,42 @@ def test_a_demosaiced_colour_recording_fits_in_colour(tmp_path):
     assert result.summary.steps == 3 and result.summary.skipped_steps == 0
     pngs = sorted((result.run_dir / "renders").rglob("*.png"))
     assert pngs and all(cv2.imread(str(p), cv2.IMREAD_UNCHANGED).ndim == 3 for p in pngs)
+
+
+def _frames_as_three_channels(path, channels):
+    """Two 16-bit frames written with three channels (``channels`` makes them from the grey
+    one), in a file that states no colour filter."""
+    rng = np.random.default_rng(5)
+    grey = [rng.integers(0, 1024, (4, 6), dtype=np.uint16) for _ in range(2)]
+    frames = [
+        Frame(channels(image), 1000 * k, 1000 * k + 500, 1000 * k, 1000 * k + 600)
+        for k, image in enumerate(grey)
+    ]
+    write_aedat4([Packet(frames=frames)], path, SourceInfo("DAVIS346", "", 6, 4))
+    return grey
+
+
+def test_grey_frames_saved_with_three_alike_channels_replay_as_a_mono_sensors(tmp_path):
+    from davis_io.aedat import open_recording
+    from davis_io.aedat.colour_frames import RawMosaicFrames
+
+    path = tmp_path / "grey.aedat4"
+    grey = _frames_as_three_channels(path, lambda image: np.stack([image] * 3, axis=-1))
+    with RawMosaicFrames(open_recording(path), None) as source:
+        frames = [frame for packet in source for frame in packet.frames]
+    assert source.color_filter is ColorFilter.MONO
+    assert [frame.image.shape for frame in frames] == [(4, 6), (4, 6)]
+    for frame, image in zip(frames, grey, strict=True):
+        np.testing.assert_array_equal(frame.image, image)
+
+
+def test_colour_frames_in_a_file_without_a_colour_filter_ask_for_one(tmp_path):
+    from davis_io.aedat import open_recording
+    from davis_io.aedat.colour_frames import RawMosaicFrames
+    from davis_io.errors import FormatError
+
+    path = tmp_path / "colour.aedat4"
+    _frames_as_three_channels(path, lambda image: np.stack([image, image // 2, image], axis=-1))
+    with pytest.raises(FormatError, match="--color-filter"):
+        with RawMosaicFrames(open_recording(path), None) as source:
+            list(source)

@@ -2,13 +2,17 @@
 
 DV records a colour DAVIS's frames demosaiced (3 channels); a session stores raw frames, the
 sensor's mosaic, as the camera read them. Every site's own sample survives bilinear
-demosaicing, so taking each pixel's filter channel gives the mosaic back exactly.
+demosaicing, so taking each pixel's filter channel gives the mosaic back exactly. A file that
+states no colour filter and whose channels are all alike (a grey frame saved as colour by a
+converter) holds a mono sensor's frames: one channel is the frame.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Iterator
+
+import numpy as np
 
 from davis_io.colorfilter import mosaic_of
 from davis_io.errors import FormatError
@@ -49,6 +53,8 @@ class RawMosaicFrames:
         if frame.image.ndim == 2:
             return frame
         if not self.color_filter.is_color:
+            if all(np.array_equal(frame.image[..., 0], frame.image[..., c]) for c in range(1, 3)):
+                return dataclasses.replace(frame, image=frame.image[..., 0].copy())
             raise FormatError(
                 f"the frame exposed from t={frame.exposure_start_us} µs has "
                 f"{frame.image.shape[2]} channels (demosaiced colour) and the file states no "
