@@ -64,6 +64,25 @@ def test_with_no_pair_left_only_the_levels_and_dead_time_are_measured(recording)
     assert "gaps in the stream" in calibration.assumed["thresholds"]
 
 
+def test_a_recording_with_almost_no_events_assumes_what_the_events_would_measure(recording):
+    full, _, _ = recording
+    sparse = dataclasses.replace(
+        full,
+        times_us=full.times_us[::2000],
+        x=full.x[::2000],
+        y=full.y[::2000],
+        is_on=full.is_on[::2000],
+    )
+    calibration = calibrate_frames(sparse)
+    assert calibration.source == "assumed"
+    assert set(calibration.assumed) >= {"thresholds", "latency_us", "pixel_factors", "response"}
+    assert (calibration.threshold_on, calibration.threshold_off) == (0.3, 0.3)
+    events = len(sparse.times_us)
+    assert f"too few events to measure from: {events}," in calibration.assumed["thresholds"]
+    # The whole recording is well above the limit.
+    assert "thresholds" not in calibrate_frames(full).assumed
+
+
 def test_a_latency_at_the_end_of_its_profile_is_assumed_not_measured(recording):
     full, _, _ = recording
     late = dataclasses.replace(full, times_us=full.times_us + 20_000)  # beyond the 12 ms tried
