@@ -12,8 +12,6 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterator
 
-import numpy as np
-
 from davis_io.colorfilter import mosaic_of
 from davis_io.errors import FormatError
 from davis_io.types import ColorFilter, Frame, Packet, PacketSource
@@ -53,7 +51,7 @@ class RawMosaicFrames:
         if frame.image.ndim == 2:
             return frame
         if not self.color_filter.is_color:
-            if all(np.array_equal(frame.image[..., 0], frame.image[..., c]) for c in range(1, 3)):
+            if (frame.image[..., 1:3] == frame.image[..., :1]).all():  # grey (alpha aside)
                 return dataclasses.replace(frame, image=frame.image[..., 0].copy())
             raise FormatError(
                 f"the frame exposed from t={frame.exposure_start_us} µs has "

@@ -213,7 +213,6 @@ class _WriterState:
 
     def __init__(self, writer, sync, progress, max_frames, duration_us):
         self.writer, self.sync, self.progress = writer, sync, progress
-        self.unstated = progress.unstated
         self.max_frames, self.duration_us = max_frames, duration_us
         self.frames_accepted = 0
         self.last_flush = time.monotonic()
@@ -238,9 +237,10 @@ class _WriterState:
             self.progress.gyro.append((packet.imu["t"].copy(), packet.imu["gyro_dps"].copy()))
         self.writer.write_imu(packet.imu)
         self.writer.write_triggers(packet.triggers)
+        unstated = self.progress.unstated
         for frame in packet.frames:
             within = self.max_frames is None or self.frames_accepted < self.max_frames
-            for ready in (self.unstated.accept if within else self.unstated.released_by)(frame):
+            for ready in (unstated.accept if within else unstated.released_by)(frame):
                 self.sync.add_frame(ready)
             self.frames_accepted += within
         self._submit(self.sync.settle())
@@ -253,7 +253,7 @@ class _WriterState:
     def finish(self) -> None:
         """Store the last events and every waiting frame (flagged when its window was cut)."""
         self._add_events(self.order.finish())
-        for ready in self.unstated.finish():
+        for ready in self.progress.unstated.finish():
             self.sync.add_frame(ready)
         note = self.order.note()
         if note is not None:
