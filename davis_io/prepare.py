@@ -11,6 +11,7 @@ from davis_io.calibration.session_calibration import session_calibration
 from davis_io.cores import cores_limited
 from davis_io.lens import read_camera_calibration
 from davis_io.poses.estimate import estimate_poses, made_with
+from davis_io.poses.recovery import matched_pair_count
 from davis_io.session import Session
 
 __all__ = [
@@ -25,8 +26,8 @@ CALIBRATION_S_PER_MILLION_EVENTS = 0.9
 """The calibration's seconds per million events on 2 cores (``seecap calibrate``, the whole
 process): 15.3 s for 16.9 M events (an emulated room) and 21.0 s for 24.2 M (a bright lamp)."""
 POSES_S_PER_PAIR = 0.012
-"""Exhaustive matching's seconds per pair of latent frames, on one thread: 24-39 s for the
-3,160 pairs of 80 latent frames."""
+"""Matching's seconds per pair of latent frames, on one thread: 24-39 s for the 3,160 pairs of
+80 latent frames."""
 POSES_S_PER_IMAGE = 0.45
 """Seconds per latent frame of the rest of the pose stage (EDI, features, mapping, the lens):
 23-36 s for 80."""
@@ -122,10 +123,14 @@ class PreparationEstimate:
 
 
 def preparation_seconds(
-    events: int, latent_frames: int, *, calibrated: bool, posed: bool
+    events: int, views: int, per_view: int, *, calibrated: bool, posed: bool
 ) -> PreparationEstimate:
-    """:class:`PreparationEstimate` from the session's counts and what it already holds."""
-    pairs = latent_frames * (latent_frames - 1) / 2
+    """:class:`PreparationEstimate` from the session's counts and what it already holds.
+
+    ``views`` frames of ``per_view`` latent frames each (b + 1).
+    """
+    latent_frames = views * per_view
+    pairs = matched_pair_count(views, per_view)
     return PreparationEstimate(
         calibration_s=0.0 if calibrated else CALIBRATION_S_PER_MILLION_EVENTS * events / 1e6,
         poses_s=0.0 if posed else POSES_S_PER_PAIR * pairs + POSES_S_PER_IMAGE * latent_frames,
@@ -143,7 +148,8 @@ def estimate_preparation(session_dir: Path | str, b: int) -> PreparationEstimate
     with Session.open(session_dir) as session:
         return preparation_seconds(
             session.event_count,
-            session.frame_count * (b + 1),
+            session.frame_count,
+            b + 1,
             calibrated=session.calibration() is not None,
             posed=session.poses(b) is not None,
         )

@@ -42,6 +42,7 @@ __all__ = [
 ]
 
 DATABASE_NAME = "database.db"
+PAIRS_NAME = "pairs.txt"
 SEED = 0
 
 
@@ -203,12 +204,15 @@ def colmap_camera(lens: Lens) -> tuple[str, list[float]]:
     return "FULL_OPENCV", values + coefficients + [0.0] * (8 - len(coefficients))
 
 
-def match_features(database: Path, matcher: Matcher) -> None:
-    """Match and geometrically verify every image pair, replacing earlier matches.
+def match_features(
+    database: Path, matcher: Matcher, pairs: Sequence[tuple[str, str]] | None = None
+) -> None:
+    """Match and geometrically verify image pairs, replacing earlier matches.
 
     Args:
         database: database written by :func:`extract_features`.
         matcher: how to match.
+        pairs: the image pairs to match, by name (every pair when None).
     """
     _quiet()
     with pycolmap.Database.open(database) as opened:
@@ -222,7 +226,17 @@ def match_features(database: Path, matcher: Matcher) -> None:
     if matcher is Matcher.GUIDED:
         matching.guided_matching = True
         matching.sift.max_ratio = 0.9
-    pycolmap.match_exhaustive(database, matching_options=matching, device=pycolmap.Device.cpu)
+    if pairs is None:
+        pycolmap.match_exhaustive(database, matching_options=matching, device=pycolmap.Device.cpu)
+        return
+    pair_list = database.with_name(PAIRS_NAME)
+    pair_list.write_text("".join(f"{first} {second}\n" for first, second in pairs))
+    pycolmap.match_image_pairs(
+        database,
+        matching_options=matching,
+        pairing_options=pycolmap.ImportedPairingOptions(match_list_path=pair_list),
+        device=pycolmap.Device.cpu,
+    )
 
 
 def _pipeline_options(settings: MapperSettings, fixed_intrinsics: bool):

@@ -1,3 +1,4 @@
+import itertools
 import subprocess
 import sys
 
@@ -11,7 +12,14 @@ from davis_io.cores import cores_limited
 from davis_io.geometry import align_poses, rotation_error_deg
 from davis_io.lens import Lens
 from davis_io.poses import recovery
-from davis_io.poses.colmap import ColmapError, SparseModel, extract_features, sparse_model_from
+from davis_io.poses.colmap import (
+    ColmapError,
+    Matcher,
+    SparseModel,
+    extract_features,
+    match_features,
+    sparse_model_from,
+)
 from davis_io.poses.recovery import reconstruct_with_recovery
 
 
@@ -119,6 +127,48 @@ def test_a_camera_outside_colmaps_own_bounds_is_not_plausible(focal, plausible):
     )
     # 0.1 to 10 times the larger side, 346 px: 34.6 to 3460 px.
     assert sparse_model_from(reconstruction).plausible_camera is plausible
+
+
+def test_a_short_recording_matches_every_pair_of_its_latent_frames():
+    names = [[f"{view}_{latent}" for latent in range(5)] for view in range(20)]
+    assert recovery.image_pairs(names, [[0.0] * 5] * 20) is None  # 4,950 pairs: every one
+    assert recovery.matched_pair_count(20, 5) == 4950
+
+
+def test_a_long_recording_matches_keyframes_with_each_other_and_latent_frames_with_nearby_views(
+    monkeypatch,
+):
+    monkeypatch.setattr(recovery, "EVERY_PAIR_LIMIT", 0)
+    names = [[f"{view}_{latent}" for latent in range(2)] for view in range(4)]
+    sharpness = [[0.0, 1.0]] * 4  # keyframes: the second latent frame of each view
+    pairs = recovery.image_pairs(names, sharpness)
+    # Of the 28 pairs of 8 images, the three between views 0 and 3 that are not both keyframes
+    # are left out (two views apart at most): 6 keyframe pairs, 4 within views, 12 one view
+    # apart, 8 two apart, less the 5 keyframe pairs counted twice.
+    assert recovery.NEIGHBOUR_VIEWS == 2 and len(pairs) == 25 == len(set(pairs))
+    left_out = {("0_0", "3_0"), ("0_0", "3_1"), ("0_1", "3_0")}
+    every = {tuple(sorted(pair)) for pair in itertools.combinations(sum(names, []), 2)}
+    assert every - set(pairs) == left_out and ("0_1", "3_1") in pairs
+    assert recovery.matched_pair_count(4, 2) == 25
+    for views, per_view in [(1, 5), (2, 3), (3, 4), (30, 5), (7, 1)]:
+        names = [[f"{view}_{latent}" for latent in range(per_view)] for view in range(views)]
+        pairs = recovery.image_pairs(names, [[1.0] * per_view] * views)
+        assert recovery.matched_pair_count(views, per_view) == len(pairs)
+
+
+def test_only_the_chosen_pairs_are_matched(tmp_path):
+    names = [name for (name,) in write_views(tmp_path / "images", orbit_poses(5))]
+    database = extract_features(tmp_path / "colmap", tmp_path / "images", names)
+    chosen = [(names[0], names[1]), (names[0], names[4]), (names[2], names[3])]
+    match_features(database, Matcher.EXHAUSTIVE, chosen)
+    with pycolmap.Database.open(database) as opened:
+        ids = {image.name: image.image_id for image in opened.read_all_images()}
+        assert opened.num_matched_image_pairs() == 3  # of the 10 pairs of 5 views
+        assert all(opened.exists_matches(ids[a], ids[b]) for a, b in chosen)
+        assert not opened.exists_matches(ids[names[0]], ids[names[2]])
+    match_features(database, Matcher.EXHAUSTIVE)  # every pair, the earlier ones replaced
+    with pycolmap.Database.open(database) as opened:
+        assert opened.num_matched_image_pairs() == 10
 
 
 def test_recovery_passes_over_a_model_with_an_implausible_camera(tmp_path, monkeypatch):

@@ -140,7 +140,7 @@ def test_a_fit_with_a_budget_says_what_its_preparation_should_take_first(monkeyp
     def fake_prepare(session, b, log=print, camera_calibration=None, threads=0):
         raise Stop
 
-    estimate = preparation_seconds(24_000_000, 80, calibrated=False, posed=False)
+    estimate = preparation_seconds(24_000_000, 16, 5, calibrated=False, posed=False)
     monkeypatch.setattr(seenerf.cli.sessions, "estimate_preparation", lambda folder, b: estimate)
     monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", fake_prepare)
     monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)

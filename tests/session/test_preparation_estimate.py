@@ -16,5 +16,5 @@ def test_the_estimate_reads_the_recordings_events_and_frames(tmp_path):
         events, frames = session.event_count, session.frame_count
     assert events > 0 and frames == 20
     estimate = estimate_preparation(folder, 4)
-    assert estimate == preparation_seconds(events, 100, calibrated=False, posed=False)
+    assert estimate == preparation_seconds(events, 20, 5, calibrated=False, posed=False)
     assert estimate.calibration_s > 0 and estimate.poses_s > 0
