@@ -28,9 +28,9 @@ process): 15.3 s for 16.9 M events (an emulated room) and 21.0 s for 24.2 M (a b
 POSES_S_PER_PAIR = 0.012
 """Matching's seconds per pair of latent frames, on one thread: 24-39 s for the 3,160 pairs of
 80 latent frames."""
-POSES_S_PER_IMAGE = 0.45
+POSES_S_PER_IMAGE = 0.65
 """Seconds per latent frame of the rest of the pose stage (EDI, features, mapping, the lens):
-23-36 s for 80."""
+45-51 s for 80 (16 frames at b = 4), 134 s for 200 (40 frames)."""
 
 
 def prepare_session(
