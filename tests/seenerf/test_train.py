@@ -147,12 +147,12 @@ def test_oracle_needs_truth(tiny_scene):
 
 def test_oracle_validation_scores_its_own_sharp_hdr_supervision():
     scene = plane_scene(height=24, width=32, frames=4, b=2, test_views=1)
-    trainer = Trainer(scene, _config(variant="oracle", steps=300, batch_pixels=None))
+    trainer = Trainer(scene, _config(variant="oracle", steps=200, batch_pixels=None))
     before = trainer.validation_psnr()
     trainer.train()
     after = trainer.validation_psnr()
     # The tone-mapped HDR of held-out truth pixels: poor at the start, good after training
-    # (scoring the oracle's untrained CRF instead stays near 9 dB throughout).
+    # (scoring the oracle's untrained CRF instead stays near 9 dB throughout); 33.9 dB at 200 steps.
     assert before < 15.0 < 30.0 < after
 
 
