@@ -146,16 +146,23 @@ def _keyframes(names: Sequence[Sequence[str]], sharpness) -> list[str]:
     return [view[int(np.argmax(scores))] for view, scores in zip(names, sharpness, strict=True)]
 
 
+def _pairs_among(images: int) -> int:
+    return images * (images - 1) // 2
+
+
+def _every_pair(images: int) -> bool:
+    """Whether every pair of ``images`` latent frames is matched."""
+    return _pairs_among(images) <= EVERY_PAIR_LIMIT
+
+
 def matched_pair_count(views: int, per_view: int) -> int:
     """The count of :func:`image_pairs` for ``views`` views of ``per_view`` latent frames each."""
-    images = views * per_view
-    every = images * (images - 1) // 2
-    if every <= EVERY_PAIR_LIMIT:
-        return every
+    if _every_pair(views * per_view):
+        return _pairs_among(views * per_view)
     reach = range(1, min(NEIGHBOUR_VIEWS, views - 1) + 1)
     near_keyframe_pairs = sum(views - step for step in reach)
     near = sum((views - step) * per_view**2 for step in reach) - near_keyframe_pairs
-    return views * (views - 1) // 2 + views * per_view * (per_view - 1) // 2 + near
+    return _pairs_among(views) + views * _pairs_among(per_view) + near
 
 
 def image_pairs(names: Sequence[Sequence[str]], sharpness) -> list[tuple[str, str]] | None:
@@ -165,8 +172,7 @@ def image_pairs(names: Sequence[Sequence[str]], sharpness) -> list[tuple[str, st
     the scene), and each latent frame with those of its own view and of the
     :data:`NEIGHBOUR_VIEWS` views on either side.
     """
-    images = sum(len(view) for view in names)
-    if images * (images - 1) // 2 <= EVERY_PAIR_LIMIT:
+    if _every_pair(sum(len(view) for view in names)):
         return None
     pairs = set(itertools.combinations(_keyframes(names, sharpness), 2))
     for view, own in enumerate(names):
