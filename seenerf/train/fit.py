@@ -14,7 +14,6 @@ from davis_io import SeecapError
 from davis_io.session import DEFAULT_BINS, Session, output_errors, writer_lock
 from davis_io.session.folder import empty_folder, plain_name
 from seenerf.data.arrays import TrainingData
-from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
@@ -22,10 +21,10 @@ from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
 from seenerf.eval.report import is_session_run, write_report
 from seenerf.model.config import FitConfig, save_config
-from seenerf.model.variants import VARIANTS
 from seenerf.provenance import software
 from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.builder import with_refined_poses
+from seenerf.train.methods import method_data
 from seenerf.train.trainer import Trainer, TrainSummary
 
 __all__ = [
@@ -109,14 +108,8 @@ def fit_session(
     start = time.perf_counter()
     run_dir = run_folder(session_dir, config, run_name)
     bins = session_bins(session_dir, config)
-    variant = VARIANTS[config.model.variant]
     with writer_lock(session_dir, f"fitting {run_dir.name}", shared=True):
-        data = load_training_data(
-            session_dir,
-            bins,
-            sensor_from_truth=variant.sensor_from_truth,
-            threshold=config.sensor.threshold,
-        )
+        data = method_data(session_dir, bins, config)
         spent_s += time.perf_counter() - start
         return fit_data(
             data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s, on_step=on_step

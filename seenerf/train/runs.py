@@ -12,7 +12,6 @@ from davis_io.geometry import OPENCV_TO_OPENGL
 from davis_io.session.folder import plain_name
 from seenerf.data.arrays import TrainingData
 from seenerf.data.frames import test_poses_in_fit_frame
-from seenerf.data.session import load_training_data
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
 from seenerf.eval.outputs import bracket_exposures, render_outputs
@@ -23,7 +22,7 @@ from seenerf.model.model import SeeNerfModel
 from seenerf.model.variants import VARIANTS
 from seenerf.train.builder import build_model, with_refined_poses
 from seenerf.train.checkpoint import load_model_state
-from seenerf.train.methods import method_class
+from seenerf.train.methods import method_class, method_data
 from seenerf.train.threads import resolve_device
 
 __all__ = ["OpenRun", "evaluate_run", "open_run", "orbit_poses", "read_path", "render_run"]
@@ -53,15 +52,9 @@ def open_run(run_dir: Path | str) -> OpenRun:
         )
     config = load_config(run_dir / "config.json")
     bins = json.loads((run_dir / "config.json").read_text()).get("bins", config.data.bins)
-    variant = VARIANTS[config.model.variant]
-    data = load_training_data(
-        run_dir.parent.parent,
-        int(bins),
-        sensor_from_truth=variant.sensor_from_truth,
-        threshold=config.sensor.threshold,
-    )
+    data = method_data(run_dir.parent.parent, int(bins), config)
     device = resolve_device(config.schedule.device)
-    model, _ = build_model(data, config, device, method_class(variant))
+    model, _ = build_model(data, config, device, method_class(VARIANTS[config.model.variant]))
     load_model_state(run_dir / "checkpoint.pt", model)
     return OpenRun(run_dir, model, with_refined_poses(data, model), config)
 
