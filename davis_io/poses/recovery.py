@@ -54,6 +54,7 @@ __all__ = [
     "Outcome",
     "Strategy",
     "image_pairs",
+    "is_long",
     "matched_pair_count",
     "reconstruct_with_recovery",
 ]
@@ -155,6 +156,15 @@ def _every_pair(images: int) -> bool:
     return _pairs_among(images) <= EVERY_PAIR_LIMIT
 
 
+def is_long(names: Sequence[Sequence[str]]) -> bool:
+    """Whether these views' latent frames are too many to match every pair of them.
+
+    A long recording matches only nearby views (:func:`image_pairs`) and maps with fewer global
+    adjustments (:attr:`~davis_io.poses.colmap.MapperSettings.long_recording`).
+    """
+    return not _every_pair(sum(len(view) for view in names))
+
+
 def matched_pair_count(views: int, per_view: int) -> int:
     """The count of :func:`image_pairs` for ``views`` views of ``per_view`` latent frames each."""
     if _every_pair(views * per_view):
@@ -172,7 +182,7 @@ def image_pairs(names: Sequence[Sequence[str]], sharpness) -> list[tuple[str, st
     the scene), and each latent frame with those of its own view and of the
     :data:`NEIGHBOUR_VIEWS` views on either side.
     """
-    if _every_pair(sum(len(view) for view in names)):
+    if not is_long(names):
         return None
     pairs = set(itertools.combinations(_keyframes(names, sharpness), 2))
     for view, own in enumerate(names):
@@ -195,18 +205,22 @@ def _map(
     The model goes to ``work_dir/sparse/<folder or the strategy's name>``.
     """
     model_dir = work_dir / "sparse" / (folder or strategy.name)
+
+    def settings(mapped: Sequence[str]) -> MapperSettings:
+        return MapperSettings(strategy.relaxed_initialisation, tuple(mapped), is_long(names))
+
     if strategy.order is not Order.KEYFRAMES_FIRST:  # its images are the ones to map
-        settings = MapperSettings(strategy.relaxed_initialisation, tuple(images))
-        return reconstruct(work_dir / DATABASE_NAME, image_dir, model_dir, settings, **mapping)
+        return reconstruct(
+            work_dir / DATABASE_NAME, image_dir, model_dir, settings(images), **mapping
+        )
     keyframe_dir = model_dir / "keyframes"
-    settings = MapperSettings(strategy.relaxed_initialisation, tuple(_keyframes(names, sharpness)))
-    reconstruct(work_dir / DATABASE_NAME, image_dir, keyframe_dir, settings, **mapping)
-    settings = MapperSettings(strategy.relaxed_initialisation, tuple(images))
+    keyframes = settings(_keyframes(names, sharpness))
+    reconstruct(work_dir / DATABASE_NAME, image_dir, keyframe_dir, keyframes, **mapping)
     return reconstruct(
         work_dir / DATABASE_NAME,
         image_dir,
         model_dir / "all",
-        settings,
+        settings(images),
         start_from=keyframe_dir,
         **mapping,
     )
