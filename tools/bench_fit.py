@@ -31,6 +31,7 @@ from seenerf.data.synthetic import plane_scene
 from seenerf.model.config import DEFAULT_VARIANT, FitConfig
 from seenerf.model.presets import DEFAULT_PRESET
 from seenerf.train.fit import fit_data
+from seenerf.train.methods import method_data
 from seenerf.train.trainer import Trainer
 
 
@@ -137,12 +138,11 @@ def quality(
         store_true_poses(session_dir, b)
         pose_source = "truth"
     poses_s = time.perf_counter() - start
-    data = load_training_data(session_dir, b)
     results = {"pose_source": pose_source, "poses_s": poses_s}
     for variant in variants:
         config = FitConfig.of(preset=preset, variant=variant, time_budget_s=budget, steps=100_000)
         run = fit_data(
-            data,
+            method_data(session_dir, b, config),  # a white-box variant reads the truth's sensor
             config,
             session_dir / "fit" / f"bench-{preset}-{variant}",
             fresh=True,
