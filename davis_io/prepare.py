@@ -30,7 +30,9 @@ POSES_S_PER_PAIR = 0.012
 80 latent frames."""
 POSES_S_PER_IMAGE = 0.65
 """Seconds per latent frame of the rest of the pose stage (EDI, features, mapping, the lens):
-45-51 s for 80 (16 frames at b = 4), 134 s for 200 (40 frames)."""
+45-51 s for 80 (16 frames at b = 4), 130-134 s for 200 (40 frames). Mapping grows faster than
+the frames beyond: 500 (100 frames) took 600 s, so the plan is low for recordings that long and
+the trainer's budget counts the seconds actually spent."""
 
 
 def prepare_session(
