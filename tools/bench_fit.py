@@ -30,8 +30,7 @@ from seenerf.data.session import load_training_data
 from seenerf.data.synthetic import plane_scene
 from seenerf.model.config import DEFAULT_VARIANT, FitConfig
 from seenerf.model.presets import DEFAULT_PRESET
-from seenerf.train.fit import fit_data
-from seenerf.train.methods import method_data
+from seenerf.train.fit import fit_data, training_data
 from seenerf.train.trainer import Trainer
 
 
@@ -142,7 +141,7 @@ def quality(
     for variant in variants:
         config = FitConfig.of(preset=preset, variant=variant, time_budget_s=budget, steps=100_000)
         run = fit_data(
-            method_data(session_dir, b, config),  # a white-box variant reads the truth's sensor
+            training_data(session_dir, b, config),  # a white-box variant reads the truth's sensor
             config,
             session_dir / "fit" / f"bench-{preset}-{variant}",
             fresh=True,

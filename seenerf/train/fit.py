@@ -14,6 +14,7 @@ from davis_io import SeecapError
 from davis_io.session import DEFAULT_BINS, Session, output_errors, writer_lock
 from davis_io.session.folder import empty_folder, plain_name
 from seenerf.data.arrays import TrainingData
+from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
@@ -21,10 +22,10 @@ from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
 from seenerf.eval.report import is_session_run, write_report
 from seenerf.model.config import FitConfig, save_config
+from seenerf.model.variants import VARIANTS
 from seenerf.provenance import software
 from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.builder import with_refined_poses
-from seenerf.train.methods import method_data
 from seenerf.train.trainer import Trainer, TrainSummary
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "run_folder",
     "session_bins",
     "start_over",
+    "training_data",
 ]
 
 
@@ -54,6 +56,20 @@ def session_bins(session_dir: Path | str, config: FitConfig) -> int:
         return config.data.bins
     with Session.open(session_dir) as session:
         return int(getattr(session.manifest, "b", 0) or DEFAULT_BINS)
+
+
+def training_data(session_dir: Path | str, bins: int, config: FitConfig) -> TrainingData:
+    """The session's training data as the configuration's variant reads it.
+
+    A variant given the sensor's truth reads the emulator's values instead of the calibration's;
+    a threshold the configuration states replaces the measured one.
+    """
+    return load_training_data(
+        session_dir,
+        bins,
+        sensor_from_truth=VARIANTS[config.model.variant].sensor_from_truth,
+        threshold=config.sensor.threshold,
+    )
 
 
 def run_folder(session_dir: Path | str, config: FitConfig, run_name: str | None) -> Path:
@@ -109,7 +125,7 @@ def fit_session(
     run_dir = run_folder(session_dir, config, run_name)
     bins = session_bins(session_dir, config)
     with writer_lock(session_dir, f"fitting {run_dir.name}", shared=True):
-        data = method_data(session_dir, bins, config)
+        data = training_data(session_dir, bins, config)
         spent_s += time.perf_counter() - start
         return fit_data(
             data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s, on_step=on_step

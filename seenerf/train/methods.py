@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -19,7 +18,6 @@ import torch
 from seenerf.data.arrays import TrainingData
 from seenerf.data.batching import FrameSampler, SharpTruthSampler
 from seenerf.data.frames import truth_to_fit_frame
-from seenerf.data.session import load_training_data
 from seenerf.errors import ConfigError, OptionError
 from seenerf.eval.metrics import psnr
 from seenerf.model.config import FitConfig
@@ -47,7 +45,6 @@ __all__ = [
     "frame_scale",
     "make_method",
     "method_class",
-    "method_data",
 ]
 
 VALIDATION_CHUNK = 2048
@@ -314,20 +311,6 @@ def method_class(variant: Variant) -> type[Method]:
     if variant.method not in METHODS:
         raise OptionError(f"unknown method {variant.method!r}; choose one of: {', '.join(METHODS)}")
     return METHODS[variant.method]
-
-
-def method_data(session_dir: Path | str, bins: int, config: FitConfig) -> TrainingData:
-    """The session's training data as the configuration's variant reads it.
-
-    A variant given the sensor's truth reads the emulator's values instead of the calibration's;
-    a threshold the configuration states replaces the measured one.
-    """
-    return load_training_data(
-        session_dir,
-        bins,
-        sensor_from_truth=VARIANTS[config.model.variant].sensor_from_truth,
-        threshold=config.sensor.threshold,
-    )
 
 
 def make_method(data: TrainingData, config: FitConfig, device: str) -> Method:

@@ -22,7 +22,8 @@ from seenerf.model.model import SeeNerfModel
 from seenerf.model.variants import VARIANTS
 from seenerf.train.builder import build_model, with_refined_poses
 from seenerf.train.checkpoint import load_model_state
-from seenerf.train.methods import method_class, method_data
+from seenerf.train.fit import training_data
+from seenerf.train.methods import method_class
 from seenerf.train.threads import resolve_device
 
 __all__ = ["OpenRun", "evaluate_run", "open_run", "orbit_poses", "read_path", "render_run"]
@@ -52,7 +53,7 @@ def open_run(run_dir: Path | str) -> OpenRun:
         )
     config = load_config(run_dir / "config.json")
     bins = json.loads((run_dir / "config.json").read_text()).get("bins", config.data.bins)
-    data = method_data(run_dir.parent.parent, int(bins), config)
+    data = training_data(run_dir.parent.parent, int(bins), config)
     device = resolve_device(config.schedule.device)
     model, _ = build_model(data, config, device, method_class(VARIANTS[config.model.variant]))
     load_model_state(run_dir / "checkpoint.pt", model)

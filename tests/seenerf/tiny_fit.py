@@ -12,7 +12,7 @@ if __name__ == "__main__":
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
     seenerf.cli.sessions.prepare_session = lambda session, b, log, camera_calibration, threads: 0.0
     seenerf.cli.sessions.session_bins = seenerf.train.fit.session_bins = lambda session, config: 2
-    seenerf.train.fit.method_data = lambda *args, **kwargs: scene
+    seenerf.train.fit.training_data = lambda *args, **kwargs: scene
     arguments = ["fit", *sys.argv[1:], "--steps", "3", "--batch-pixels", "6", "--warm-steps", "2"]
     status = main([*arguments, "--validation-share", "0.1", "--quiet"])
     print(f"ray imported: {'ray' in sys.modules}")

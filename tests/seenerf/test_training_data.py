@@ -6,7 +6,7 @@ from davis_io.session import Session
 from davis_io.session.calibration import default_calibration
 from davis_io.session.truth import load_truth
 from seenerf.model.config import FitConfig
-from seenerf.train.methods import method_data
+from seenerf.train.fit import training_data
 
 BINS = 4
 MEASURED = 0.31
@@ -22,14 +22,14 @@ def calibrated(copies):
 
 
 def test_a_recording_variant_reads_the_calibration_and_a_stated_threshold_replaces_it(calibrated):
-    assert method_data(calibrated, BINS, FitConfig.of()).threshold == pytest.approx(MEASURED)
-    stated = method_data(calibrated, BINS, FitConfig.of(threshold=0.22))
+    assert training_data(calibrated, BINS, FitConfig.of()).threshold == pytest.approx(MEASURED)
+    stated = training_data(calibrated, BINS, FitConfig.of(threshold=0.22))
     assert stated.threshold == pytest.approx(0.22)
 
 
 def test_the_white_box_variant_reads_the_emulated_sensors_truth(calibrated):
     true = load_truth(calibrated / "truth").sensor_calibration().threshold
     assert abs(true - MEASURED) > 0.005  # the two sources are told apart
-    data = method_data(calibrated, BINS, FitConfig.of(variant="white-box"))
+    data = training_data(calibrated, BINS, FitConfig.of(variant="white-box"))
     assert data.threshold == pytest.approx(true)
     assert data.num_bins == BINS and data.num_frames == 4
