@@ -131,6 +131,24 @@ def test_a_camera_outside_colmaps_own_bounds_is_not_plausible(focal, plausible):
     assert sparse_model_from(reconstruction).plausible_camera is plausible
 
 
+@pytest.mark.parametrize(
+    ("fx", "fy", "plausible"), [(131.81, 131.70, True), (280.0, 290.0, True), (114.2, 54.06, False)]
+)
+def test_a_camera_whose_pixels_are_not_square_is_not_plausible(fx, fy, plausible):
+    # A lens refined with two focal lengths (COLMAP's OPENCV): 1.0008 and 1.036 pass, 2.1 fails.
+    reconstruction = pycolmap.Reconstruction()
+    reconstruction.add_camera(
+        pycolmap.Camera(
+            model="OPENCV",
+            width=173,
+            height=130,
+            params=[fx, fy, 86.0, 64.5, 0.12, 0.0, 0.15, -0.11],
+            camera_id=1,
+        )
+    )
+    assert sparse_model_from(reconstruction).plausible_camera is plausible
+
+
 def test_a_short_recording_matches_every_pair_of_its_latent_frames():
     names = [[f"{view}_{latent}" for latent in range(5)] for view in range(20)]
     assert recovery.image_pairs(names, [[0.0] * 5] * 20) is None  # 4,950 pairs: every one
