@@ -27,9 +27,10 @@ __all__ = [
 THRESHOLD = Bounds(0.05, 1.0, "ln per event")
 """A DAVIS pixel's contrast threshold: a few tenths at usual biases, 0.05-1 at the extremes."""
 
-LATENCY_US = Bounds(0, 10_000, "µs", integer=True)
+LATENCY_US = Bounds(0, 40_000, "µs", integer=True)
 """How late a DAVIS pixel's events come: well under a millisecond in bright light, a few in the
-dark; 10 ms only in near darkness."""
+dark; tens of milliseconds in near darkness, where the photoreceptor's bandwidth falls to tens of
+hertz."""
 
 DEAD_TIME_US = Bounds(0, 20_000, "µs", integer=True)
 """A pixel's refractory period: microseconds to a few milliseconds."""

@@ -7,7 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
-from davis_io.calibration.estimate import LATENCIES_US, CalibrationInput, Progress, calibrate_frames
+from davis_io.calibration.estimate import (
+    LATENCIES_US,
+    LONGER_LATENCIES_US,
+    CalibrationInput,
+    Progress,
+    calibrate_frames,
+)
 from davis_io.errors import UsageError
 from davis_io.session import (
     DEFAULT_THRESHOLD,
@@ -19,6 +25,9 @@ from davis_io.session import (
 
 __all__ = ["calibrate_session", "session_calibration"]
 
+LATEST_US = max(LATENCIES_US + LONGER_LATENCIES_US)
+"""How far past the last exposure the events are read: the latest latency the profile tries."""
+
 
 def _recording(session: Session) -> CalibrationInput:
     table = session.frames_table()
@@ -27,7 +36,7 @@ def _recording(session: Session) -> CalibrationInput:
     top = float(2 ** frames[0].bit_depth - 1) if frames else 1.0
     start, end = table.exposure_start_us[usable], table.exposure_end_us[usable]
     events = (
-        session.events_between(int(start[0]), int(end[-1]) + max(LATENCIES_US))
+        session.events_between(int(start[0]), int(end[-1]) + LATEST_US)
         if len(usable)
         else np.zeros(0, [("t", "i8"), ("x", "u2"), ("y", "u2"), ("p", "i1")])
     )

@@ -7,7 +7,7 @@ import pytest
 from synthetic_recording import KnownSensor, synthetic_recording
 
 from davis_io.calibration import calibrate_frames
-from davis_io.calibration.estimate import LATENCIES_US
+from davis_io.calibration.estimate import LATENCIES_US, LONGER_LATENCIES_US
 from davis_io.calibration.plausible import Assumptions, flat_profile
 from davis_io.emulator import Response
 from davis_io.gaps import find_gaps
@@ -83,13 +83,34 @@ def test_a_recording_with_almost_no_events_assumes_what_the_events_would_measure
     assert "thresholds" not in calibrate_frames(full).assumed
 
 
+def test_a_latency_beyond_the_first_profile_is_measured_on_its_longer_latencies(recording):
+    full, _, _ = recording
+    late = dataclasses.replace(full, times_us=full.times_us + 20_000)  # a slow pixel in the dark
+    lines = []
+    calibration = calibrate_frames(late, progress=lines.append)
+    assert max(LATENCIES_US) == 12_000 and LONGER_LATENCIES_US[:2] == (16_000, 24_000)
+    assert calibration.latency_us == pytest.approx(20_000, abs=1_000)
+    assert "latency_us" not in calibration.assumed
+    # The profile went on to 16 and 24 ms, where the best stopped being the last one tried.
+    tried = {line.split(":")[0] for line in lines if line.startswith("latency ")}
+    assert {"latency 16 ms", "latency 24 ms"} <= tried and "latency 32 ms" not in tried
+
+
 def test_a_latency_at_the_end_of_its_profile_is_assumed_not_measured(recording):
     full, _, _ = recording
-    late = dataclasses.replace(full, times_us=full.times_us + 20_000)  # beyond the 12 ms tried
+    late = dataclasses.replace(full, times_us=full.times_us + 45_000)  # beyond the 32 ms tried
     calibration = calibrate_frames(late)
     assert calibration.latency_us == 0
-    assert "its last value, 12 ms" in calibration.assumed["latency_us"]
-    assert max(LATENCIES_US) == 12_000
+    assert "its last value, 32 ms" in calibration.assumed["latency_us"]
+    assert max(LONGER_LATENCIES_US) == 32_000
+
+
+def test_a_recording_at_usual_light_is_profiled_to_12_ms_only(recording):
+    full, _, _ = recording
+    lines = []
+    calibrate_frames(full, progress=lines.append)
+    tried = {line.split(":")[0] for line in lines if line.startswith("latency ")}
+    assert "latency 12 ms" in tried and "latency 16 ms" not in tried
 
 
 def test_a_response_straight_only_below_zero_is_not_called_linear():
