@@ -28,11 +28,14 @@ process): 15.3 s for 16.9 M events (an emulated room) and 21.0 s for 24.2 M (a b
 POSES_S_PER_PAIR = 0.012
 """Matching's seconds per pair of latent frames, on one thread: 24-39 s for the 3,160 pairs of
 80 latent frames."""
-POSES_S_PER_IMAGE = 0.65
-"""Seconds per latent frame of the rest of the pose stage (EDI, features, mapping, the lens):
-45-51 s for 80 (16 frames at b = 4), 130-134 s for 200 (40 frames). Mapping grows faster than
-the frames beyond: 500 (100 frames) took 600 s, so the plan is low for recordings that long and
-the trainer's budget counts the seconds actually spent."""
+POSES_S_PER_IMAGE = 0.45
+"""Seconds per latent frame of the rest of the pose stage (EDI, features, the lens, and mapping's
+part that grows with the frames alone)."""
+POSES_S_PER_IMAGE_SQUARED = 0.0015
+"""Mapping's seconds per latent frame squared: every global adjustment covers the whole model so
+far. With :data:`POSES_S_PER_IMAGE`, the rest of the pose stage measured 45-51 s for 80 latent
+frames (16 frames at b = 4), 140 s for 200 (40 frames) and 607 s for 500 (100 frames); the two
+terms give 46, 150 and 600 s. A single rate of 0.65 s gave 52, 130 and 325 s."""
 
 
 def prepare_session(
@@ -135,7 +138,11 @@ def preparation_seconds(
     pairs = matched_pair_count(views, per_view)
     return PreparationEstimate(
         calibration_s=0.0 if calibrated else CALIBRATION_S_PER_MILLION_EVENTS * events / 1e6,
-        poses_s=0.0 if posed else POSES_S_PER_PAIR * pairs + POSES_S_PER_IMAGE * latent_frames,
+        poses_s=0.0
+        if posed
+        else POSES_S_PER_PAIR * pairs
+        + POSES_S_PER_IMAGE * latent_frames
+        + POSES_S_PER_IMAGE_SQUARED * latent_frames**2,
         events=events,
         latent_frames=latent_frames,
     )
