@@ -24,6 +24,7 @@ from seenerf.data.session import load_training_data
 from seenerf.model.config import FitConfig
 from seenerf.train import fit_session, render_run
 from seenerf.train.fit import resolved_settings
+from seenerf.train.methods import make_method
 from seenerf.train.trainer import Trainer
 
 SMALL = dict(frames=6, test_views=1, baseline_m=0.18, width=173, height=130, focal_px=140.0)
@@ -71,8 +72,8 @@ def test_the_resolved_fit_and_its_first_losses_are_the_same(twins):
     losses, settings = [], []
     for folder in twins:
         data = load_training_data(folder, 4)
-        trainer = Trainer(data, config, log=lambda line: None)
-        settings.append(json.dumps(resolved_settings(trainer), default=str))
+        trainer = Trainer(make_method(data, config, "cpu"), log=lambda line: None)
+        settings.append(json.dumps(resolved_settings(trainer.method), default=str))
         steps = []
         for _ in range(3):
             torch.manual_seed(0)

@@ -26,6 +26,8 @@ from seenerf.model.variants import VARIANTS
 from seenerf.provenance import software
 from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.builder import with_refined_poses
+from seenerf.train.methods import Method, make_method
+from seenerf.train.threads import limit_threads, resolve_device
 from seenerf.train.trainer import Trainer, TrainSummary
 
 __all__ = [
@@ -168,22 +170,21 @@ class LogBook:
             file.writelines(lines)
 
 
-def resolved_settings(trainer: Trainer) -> dict:
+def resolved_settings(method: Method) -> dict:
     """What a fit resolved for its scene, saved beside its config: field, box, space, sensor."""
-    renderer = trainer.model.renderer
+    model, preset, data = method.model, method.preset, method.data
+    renderer = model.renderer
     return {
-        "field": trainer.preset.field,
-        "field_args": trainer.preset.field_args,
-        "bins": trainer.data.num_bins,
+        "field": preset.field,
+        "field_args": preset.field_args,
+        "bins": data.num_bins,
         "box": {"low": renderer.box.low, "high": renderer.box.high},
         "space": "ndc" if renderer.space is not None else "world",
-        "event_weight": trainer.preset.event_weight,
-        "event_threshold": trainer.data.threshold,
-        "event_cutoff_hz": trainer.data.cutoff_hz or trainer.config.sensor.cutoff_hz,
-        "event_dead_time_s": trainer.model.event_crf.dead_time_s
-        if trainer.model.event_crf is not None
-        else 0.0,
-        "rgb_response": None if trainer.model.crf is None else type(trainer.model.crf).__name__,
+        "event_weight": preset.event_weight,
+        "event_threshold": data.threshold,
+        "event_cutoff_hz": data.cutoff_hz or method.config.sensor.cutoff_hz,
+        "event_dead_time_s": model.event_crf.dead_time_s if model.event_crf is not None else 0.0,
+        "rgb_response": None if model.crf is None else type(model.crf).__name__,
     }
 
 
@@ -210,10 +211,12 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     if fresh:
         start_over(run_dir)
     log = (log if isinstance(log, LogBook) else LogBook(log)).open(run_dir / "log.txt")
-    trainer = Trainer(data, config, run_dir, log, spent_s, on_step)
-    threads = torch.get_num_threads() if trainer.device == "cpu" else 0
+    limit_threads(config.schedule.threads)
+    device = resolve_device(config.schedule.device)
+    method = make_method(data, config, device)
+    threads = torch.get_num_threads() if method.device == "cpu" else 0
     log(
-        f"training {config.model.preset} {config.model.variant} on {trainer.device}"
+        f"training {config.model.preset} {config.model.variant} on {method.device}"
         + (f" ({threads} threads)" if threads else "")
         + f", {data.num_frames} frames, b = {data.num_bins}"
     )
@@ -222,8 +225,8 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         f"image motion between latent poses: median {travel_px:.1f} px at the mean depth; "
         f"{config.model.subframes} pose(s) per bin in the blur integral"
     )
-    if isinstance(trainer.model.crf, LinearCrf):
-        crf = trainer.model.crf
+    if isinstance(method.model.crf, LinearCrf):
+        crf = method.model.crf
         log(
             f"frames measured linear: response linear above black {crf.black:.3f}, clipped at "
             f"{crf.saturation:.3f} (--response learned learns it instead)"
@@ -231,8 +234,9 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     save_config(
         config,
         run_dir / "config.json",
-        {**resolved_settings(trainer), "software": software(trainer.device)},
+        {**resolved_settings(method), "software": software(method.device)},
     )
+    trainer = Trainer(method, run_dir, log, spent_s, on_step)
     summary = trainer.train()
     log(
         f"trained {summary.steps} steps in {summary.elapsed_s:.0f} s ({summary.stopped}); "

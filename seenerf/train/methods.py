@@ -131,6 +131,7 @@ class Method:
         device: str,
     ):
         self.model, self.data, self.config, self.preset = model, data, config, preset
+        self.device = device
         rng = np.random.default_rng(config.schedule.seed)
         pixels = data.image_size[0] * data.image_size[1]
         count = int(round(config.data.validation_share * data.num_frames * pixels))
@@ -314,7 +315,11 @@ def method_class(variant: Variant) -> type[Method]:
 
 
 def make_method(data: TrainingData, config: FitConfig, device: str) -> Method:
-    """The method of the configuration's variant, with the model it trains built for this scene."""
+    """The method of the configuration's variant, with the model it trains built for this scene.
+
+    The model's weights are drawn at the configuration's seed.
+    """
+    torch.manual_seed(config.schedule.seed)
     method = method_class(VARIANTS[config.model.variant])
     model, preset = build_model(data, config, device, method)
     return method(model, data, config, preset, device)

@@ -10,14 +10,12 @@ from pathlib import Path
 
 import torch
 
-from seenerf.data.arrays import TrainingData
 from seenerf.errors import TrainingDataError, TrainingStopped
-from seenerf.model.config import FitConfig
 from seenerf.model.pose_correction import LEARNING_RATE as POSE_LEARNING_RATE
 from seenerf.train.checkpoint import load_checkpoint, save_checkpoint
-from seenerf.train.methods import make_method
+from seenerf.train.methods import Method
 from seenerf.train.stopping import StopRequest, stop_requests
-from seenerf.train.threads import CoreWatch, limit_threads, resolve_device, threads_beside
+from seenerf.train.threads import CoreWatch, limit_threads, threads_beside
 
 __all__ = ["TrainSummary", "Trainer", "TrainingProgress"]
 
@@ -93,11 +91,13 @@ class TrainingProgress:
 
 
 class Trainer:
-    """Trains one model on one scene.
+    """Trains one method's model: steps, learning rate, budget, checkpoints, progress, stops.
+
+    What is trained, on which data and with which loss terms is the method's
+    (:func:`~seenerf.train.methods.make_method`); the schedule is its configuration's.
 
     Args:
-        data: training arrays.
-        config: the fit configuration.
+        method: the fit's method, its model built.
         run_dir: folder for the checkpoint (None: no checkpoints).
         log: receives every progress line.
         spent_s: seconds already spent by the caller (poses) against the time budget.
@@ -106,20 +106,16 @@ class Trainer:
 
     def __init__(
         self,
-        data: TrainingData,
-        config: FitConfig,
+        method: Method,
         run_dir: Path | None = None,
         log: Callable[[str], None] = print,
         spent_s: float = 0.0,
         on_step: Callable[[Trainer], None] | None = None,
     ):
-        self.data, self.config, self.run_dir, self.log = data, config, run_dir, log
-        self.on_step = on_step
-        limit_threads(config.schedule.threads)
-        self.device = resolve_device(config.schedule.device)
-        torch.manual_seed(config.schedule.seed)
-        self.method = make_method(data, config, self.device)
-        self.model, self.preset = self.method.model, self.method.preset
+        self.method, self.run_dir, self.log, self.on_step = method, run_dir, log, on_step
+        self.data, self.config, self.device = method.data, method.config, method.device
+        self.model, self.preset = method.model, method.preset
+        config = self.config
         self.generator = torch.Generator().manual_seed(config.schedule.seed)
         # A budget alone runs until it is spent or the held-out score stops rising (a plateau),
         # not to the preset's step count: that count only sets how far the rate falls.

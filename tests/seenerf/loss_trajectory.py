@@ -12,6 +12,7 @@ import torch
 
 from seenerf.data.synthetic import plane_scene
 from seenerf.model.config import FitConfig
+from seenerf.train.methods import make_method
 from seenerf.train.trainer import Trainer
 
 FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "loss_trajectories.json"
@@ -36,7 +37,7 @@ def trajectory(options: dict) -> list[dict]:
     def keep(trainer: Trainer) -> None:
         terms.append(dict(trainer.last_terms))
 
-    Trainer(scene, config, log=lambda line: None, on_step=keep).train()
+    Trainer(make_method(scene, config, "cpu"), log=lambda line: None, on_step=keep).train()
     return terms
 
 

@@ -6,7 +6,7 @@ import torch
 from seenerf.errors import OptionError
 from seenerf.model.config import FitConfig
 from seenerf.model.variants import VARIANTS, Variant
-from seenerf.train.methods import METHODS, LossTerm, RecordingMethod, Step
+from seenerf.train.methods import METHODS, LossTerm, RecordingMethod, Step, make_method
 from seenerf.train.trainer import Trainer
 
 
@@ -25,7 +25,7 @@ def test_a_toy_variant_trains_through_its_own_method(monkeypatch, tiny_scene):
         VARIANTS, "toy", Variant("frames only, events unused", method="frames-only")
     )
     config = FitConfig.of(variant="toy", steps=4, batch_pixels=8, warm_steps=2, threads=1)
-    trainer = Trainer(tiny_scene, config, log=lambda line: None)
+    trainer = Trainer(make_method(tiny_scene, config, "cpu"), log=lambda line: None)
     assert isinstance(trainer.method, FramesOnly)
     before = [p.detach().clone() for p in trainer.model.renderer.parameters()]
     trainer.train()
@@ -37,4 +37,4 @@ def test_a_toy_variant_trains_through_its_own_method(monkeypatch, tiny_scene):
 def test_a_variant_naming_no_method_is_refused(monkeypatch, tiny_scene):
     monkeypatch.setitem(VARIANTS, "lost", Variant("names a method nobody wrote", method="nobody"))
     with pytest.raises(OptionError, match="unknown method 'nobody'; choose one of: recording"):
-        Trainer(tiny_scene, FitConfig.of(variant="lost", steps=1), log=lambda line: None)
+        make_method(tiny_scene, FitConfig.of(variant="lost", steps=1), "cpu")

@@ -50,7 +50,9 @@ def _config(**overrides):
 
 
 def test_training_refines_the_poses_and_a_saved_run_keeps_them(tiny_scene, tmp_path):
-    trainer = Trainer(tiny_scene, _config(), run_dir=tmp_path, log=lambda line: None)
+    trainer = Trainer(
+        make_method(tiny_scene, _config(), "cpu"), run_dir=tmp_path, log=lambda line: None
+    )
     trainer.train()
     twist = trainer.model.pose_correction.twist.detach()
     assert torch.count_nonzero(twist) == twist.numel()  # every view's every component moved

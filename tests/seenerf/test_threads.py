@@ -84,6 +84,7 @@ def test_a_fit_with_automatic_threads_gives_a_core_up_when_other_work_starts(
     import seenerf.train.threads as threads
     import seenerf.train.trainer as trainer_module
     from seenerf.model.config import FitConfig
+    from seenerf.train.methods import make_method
     from seenerf.train.threads import CoreWatch
     from seenerf.train.trainer import Trainer
 
@@ -95,15 +96,16 @@ def test_a_fit_with_automatic_threads_gives_a_core_up_when_other_work_starts(
     try:
         torch.set_num_threads(2)  # whatever an earlier test left
         config = FitConfig.of(steps=3, batch_pixels=8, warm_steps=2, validation_share=0.1)
-        Trainer(tiny_scene, config, log=lines.append).train()
+        Trainer(make_method(tiny_scene, config, "cpu"), log=lines.append).train()
         assert torch.get_num_threads() == 1
     finally:
         torch.set_num_threads(before)
     assert "threads: 1 from now on (1.0 cores busy with other work)" in lines
     asked, lines = FitConfig.of(steps=3, batch_pixels=8, warm_steps=2, threads=2), []
     try:
-        Trainer(tiny_scene, asked, log=lines.append).train()
-        assert torch.get_num_threads() == 2  # a count asked for is kept
+        torch.set_num_threads(2)  # as the fit sets a count asked for
+        Trainer(make_method(tiny_scene, asked, "cpu"), log=lines.append).train()
+        assert torch.get_num_threads() == 2  # and the trainer keeps it
     finally:
         torch.set_num_threads(before)
     assert not [line for line in lines if "from now on" in line]
