@@ -30,8 +30,9 @@ from seenerf.data.session import load_training_data
 from seenerf.data.synthetic import plane_scene
 from seenerf.model.config import DEFAULT_VARIANT, FitConfig
 from seenerf.model.presets import DEFAULT_PRESET
-from seenerf.train.fit import fit_data, training_data
+from seenerf.train.fit import fit_data
 from seenerf.train.methods import make_method
+from seenerf.train.session_fit import training_data
 from seenerf.train.threads import resolve_device
 from seenerf.train.trainer import Trainer
 

@@ -21,7 +21,8 @@ from davis_io import describe_error
 from seenerf.cli.sessions import SessionFit, fit_kept_apart
 from seenerf.errors import ConfigError
 from seenerf.model.config import FitConfig
-from seenerf.train.fit import run_folder, start_over
+from seenerf.train.fit import start_over
+from seenerf.train.session_fit import run_folder
 from seenerf.train.trainer import TrainingProgress
 
 __all__ = [

@@ -11,7 +11,8 @@ from davis_io import describe_error
 from davis_io.prepare import estimate_preparation, prepare_session
 from seenerf.errors import TrainingStopped
 from seenerf.model.config import FitConfig
-from seenerf.train.fit import FitResult, LogBook, fit_session, session_bins
+from seenerf.train.fit import FitResult, LogBook
+from seenerf.train.session_fit import fit_session, session_bins
 from seenerf.train.threads import choose_threads, limit_threads
 from seenerf.train.trainer import Trainer
 

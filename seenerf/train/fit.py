@@ -1,4 +1,4 @@
-"""``fit_session``: training, renders, scores and exports of one prepared session."""
+"""``fit_data``: training, renders, scores and exports of training data, in a run folder."""
 
 from __future__ import annotations
 
@@ -11,10 +11,9 @@ import numpy as np
 import torch
 
 from davis_io import SeecapError
-from davis_io.session import DEFAULT_BINS, Session, output_errors, writer_lock
-from davis_io.session.folder import empty_folder, plain_name
+from davis_io.session import output_errors, writer_lock
+from davis_io.session.folder import empty_folder
 from seenerf.data.arrays import TrainingData
-from seenerf.data.session import load_training_data
 from seenerf.data.subframes import median_travel_px
 from seenerf.errors import CheckpointError
 from seenerf.eval.export import write_json
@@ -22,7 +21,6 @@ from seenerf.eval.outputs import render_outputs
 from seenerf.eval.plots import training_curves
 from seenerf.eval.report import is_session_run, write_report
 from seenerf.model.config import FitConfig, save_config
-from seenerf.model.variants import VARIANTS
 from seenerf.provenance import software
 from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.builder import with_refined_poses
@@ -30,17 +28,7 @@ from seenerf.train.methods import Method, make_method
 from seenerf.train.threads import limit_threads, resolve_device
 from seenerf.train.trainer import Trainer, TrainSummary
 
-__all__ = [
-    "FitResult",
-    "LogBook",
-    "fit_data",
-    "fit_session",
-    "resolved_settings",
-    "run_folder",
-    "session_bins",
-    "start_over",
-    "training_data",
-]
+__all__ = ["FitResult", "LogBook", "fit_data", "resolved_settings", "start_over"]
 
 
 @dataclass
@@ -50,38 +38,6 @@ class FitResult:
     run_dir: Path
     summary: TrainSummary
     metrics: dict
-
-
-def session_bins(session_dir: Path | str, config: FitConfig) -> int:
-    """B from the config, else the session manifest, else :data:`DEFAULT_BINS`."""
-    if config.data.bins is not None:
-        return config.data.bins
-    with Session.open(session_dir) as session:
-        return int(getattr(session.manifest, "b", 0) or DEFAULT_BINS)
-
-
-def training_data(session_dir: Path | str, bins: int, config: FitConfig) -> TrainingData:
-    """The session's training data as the configuration's variant reads it.
-
-    A variant given the sensor's truth reads the emulator's values instead of the calibration's;
-    a threshold the configuration states replaces the measured one.
-    """
-    return load_training_data(
-        session_dir,
-        bins,
-        sensor_from_truth=VARIANTS[config.model.variant].sensor_from_truth,
-        threshold=config.sensor.threshold,
-    )
-
-
-def run_folder(session_dir: Path | str, config: FitConfig, run_name: str | None) -> Path:
-    """``session/fit/<run>/``: the run's name, or ``<preset>-<variant>`` by default.
-
-    Raises:
-        UsageError: ``run_name`` is not a plain folder name (a separator, ``..``, absolute).
-    """
-    name = plain_name(run_name, "--run") if run_name is not None else None
-    return Path(session_dir) / "fit" / (name or f"{config.model.preset}-{config.model.variant}")
 
 
 def start_over(run_dir: Path) -> None:
@@ -98,40 +54,6 @@ def start_over(run_dir: Path) -> None:
         return
     with writer_lock(run_dir, f"clearing {run_dir.name}"):
         empty_folder(run_dir)
-
-
-def fit_session(
-    session_dir: Path | str,
-    config: FitConfig,
-    *,
-    run_name: str | None = None,
-    fresh: bool = False,
-    log: Callable[[str], None] = print,
-    spent_s: float = 0.0,
-    on_step: Callable[[Trainer], None] | None = None,
-) -> FitResult:
-    """Fit a calibrated session with poses into ``session/fit/<run>/``.
-
-    Args:
-        session_dir: the session folder (``seecap fit`` calibrates it and estimates its poses
-            first when missing: :func:`davis_io.prepare.prepare_session`).
-        config: the fit configuration.
-        run_name: run folder name (default ``<preset>-<variant>``).
-        fresh: discard an existing checkpoint of this run instead of resuming it.
-        log: receives progress lines.
-        spent_s: seconds of the time budget already spent (calibration and poses).
-        on_step: called with the trainer after every training step (a progress bar).
-    """
-    session_dir = Path(session_dir)
-    start = time.perf_counter()
-    run_dir = run_folder(session_dir, config, run_name)
-    bins = session_bins(session_dir, config)
-    with writer_lock(session_dir, f"fitting {run_dir.name}", shared=True):
-        data = training_data(session_dir, bins, config)
-        spent_s += time.perf_counter() - start
-        return fit_data(
-            data, config, run_dir, fresh=fresh, log=log, spent_s=spent_s, on_step=on_step
-        )
 
 
 class LogBook:
@@ -214,6 +136,7 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     limit_threads(config.schedule.threads)
     device = resolve_device(config.schedule.device)
     method = make_method(data, config, device)
+    trainer = Trainer(method, run_dir, log, spent_s, on_step)
     threads = torch.get_num_threads() if method.device == "cpu" else 0
     log(
         f"training {config.model.preset} {config.model.variant} on {method.device}"
@@ -236,7 +159,6 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         run_dir / "config.json",
         {**resolved_settings(method), "software": software(method.device)},
     )
-    trainer = Trainer(method, run_dir, log, spent_s, on_step)
     summary = trainer.train()
     log(
         f"trained {summary.steps} steps in {summary.elapsed_s:.0f} s ({summary.stopped}); "

@@ -111,8 +111,8 @@ def test_a_fits_log_holds_the_preparation_and_its_config_the_software(monkeypatc
 
     monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", fake_prepare)
     monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 2)
-    monkeypatch.setattr("seenerf.train.fit.session_bins", lambda session, config: 2)
-    monkeypatch.setattr("seenerf.train.fit.training_data", lambda *a, **k: scene)
+    monkeypatch.setattr("seenerf.train.session_fit.session_bins", lambda session, config: 2)
+    monkeypatch.setattr("seenerf.train.session_fit.training_data", lambda *a, **k: scene)
     (tmp_path / "session.json").write_text("{}")
     config = FitConfig.of(steps=2, batch_pixels=8, warm_steps=2, validation_share=0.1)
     shown = []

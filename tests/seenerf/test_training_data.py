@@ -6,7 +6,7 @@ from davis_io.session import Session
 from davis_io.session.calibration import default_calibration
 from davis_io.session.truth import load_truth
 from seenerf.model.config import FitConfig
-from seenerf.train.fit import training_data
+from seenerf.train.session_fit import training_data
 
 BINS = 4
 MEASURED = 0.31
