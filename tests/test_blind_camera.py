@@ -72,7 +72,7 @@ def test_the_resolved_fit_and_its_first_losses_are_the_same(twins):
     losses, settings = [], []
     for folder in twins:
         data = load_training_data(folder, 4)
-        trainer = Trainer(make_method(data, config, "cpu"), log=lambda line: None)
+        trainer = Trainer(make_method(data, config), log=lambda line: None)
         settings.append(json.dumps(resolved_settings(trainer.method), default=str))
         steps = []
         for _ in range(3):

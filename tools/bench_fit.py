@@ -33,7 +33,6 @@ from seenerf.model.presets import DEFAULT_PRESET
 from seenerf.train.fit import fit_data
 from seenerf.train.methods import make_method
 from seenerf.train.session_fit import training_data
-from seenerf.train.threads import resolve_device
 from seenerf.train.trainer import Trainer
 
 
@@ -59,9 +58,7 @@ def speed_trainer(data, preset: str) -> Trainer:
         warm_steps=0,
         validation_share=0.0,
     )
-    return Trainer(
-        make_method(data, config, resolve_device(config.schedule.device)), log=lambda line: None
-    )
+    return Trainer(make_method(data, config), log=lambda line: None)
 
 
 def warm_up_steps(trainer: Trainer) -> int:

@@ -23,9 +23,25 @@ from seenerf.sensors.rgb_crf import LinearCrf, RgbCrf, TabulatedCrf
 
 __all__ = [
     "build_model",
+    "resolve_device",
     "rgb_response",
     "with_refined_poses",
 ]
+
+
+def resolve_device(name: str) -> str:
+    """``auto`` becomes ``cuda`` when a CUDA device is present, else ``cpu``.
+
+    Raises:
+        ConfigError: ``cuda`` was asked for and none is present.
+    """
+    if name == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    if name == "cuda" and not torch.cuda.is_available():
+        raise ConfigError(
+            "device cuda was requested but torch sees no CUDA device; use --device cpu"
+        )
+    return name
 
 
 def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.Module | None:

@@ -25,7 +25,6 @@ from seenerf.provenance import software
 from seenerf.sensors.rgb_crf import LinearCrf
 from seenerf.train.builder import with_refined_poses
 from seenerf.train.methods import Method, make_method
-from seenerf.train.threads import limit_threads, resolve_device
 from seenerf.train.trainer import Trainer, TrainSummary
 
 __all__ = ["FitResult", "LogBook", "fit_data", "resolved_settings", "start_over"]
@@ -123,7 +122,9 @@ def fit_data(
     """Train on ``data`` in ``run_dir`` (resuming a checkpoint unless ``fresh``), render, score.
 
     Every line logged also goes to ``run_dir/log.txt`` (a :class:`LogBook` given as ``log``
-    writes there the lines it held first).
+    writes there the lines it held first). It computes with the threads the process has:
+    ``seecap fit`` bounds them before the session is prepared
+    (:func:`seenerf.cli.sessions.prepare_and_fit`).
     """
     with writer_lock(run_dir, f"fitting {run_dir.name}"):
         return _fit(data, config, run_dir, fresh, log, spent_s, on_step)
@@ -133,9 +134,7 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     if fresh:
         start_over(run_dir)
     log = (log if isinstance(log, LogBook) else LogBook(log)).open(run_dir / "log.txt")
-    limit_threads(config.schedule.threads)
-    device = resolve_device(config.schedule.device)
-    method = make_method(data, config, device)
+    method = make_method(data, config)
     trainer = Trainer(method, run_dir, log, spent_s, on_step)
     threads = torch.get_num_threads() if method.device == "cpu" else 0
     log(

@@ -25,7 +25,7 @@ from seenerf.model.model import SeeNerfModel
 from seenerf.model.pose_correction import PRIOR_WEIGHT as POSE_PRIOR_WEIGHT
 from seenerf.model.presets import Preset
 from seenerf.model.variants import VARIANTS, Variant
-from seenerf.train.builder import build_model
+from seenerf.train.builder import build_model, resolve_device
 from seenerf.train.losses import (
     event_loss,
     hdr_tone_map,
@@ -314,12 +314,13 @@ def method_class(variant: Variant) -> type[Method]:
     return METHODS[variant.method]
 
 
-def make_method(data: TrainingData, config: FitConfig, device: str) -> Method:
+def make_method(data: TrainingData, config: FitConfig) -> Method:
     """The method of the configuration's variant, with the model it trains built for this scene.
 
-    The model's weights are drawn at the configuration's seed.
+    The model is built on the configuration's device, its weights drawn at its seed.
     """
     torch.manual_seed(config.schedule.seed)
     method = method_class(VARIANTS[config.model.variant])
+    device = resolve_device(config.schedule.device)
     model, preset = build_model(data, config, device, method)
     return method(model, data, config, preset, device)

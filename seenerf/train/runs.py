@@ -20,11 +20,10 @@ from seenerf.eval.views import render_views, write_views
 from seenerf.model.config import FitConfig, load_config
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.variants import VARIANTS
-from seenerf.train.builder import build_model, with_refined_poses
+from seenerf.train.builder import build_model, resolve_device, with_refined_poses
 from seenerf.train.checkpoint import load_model_state
 from seenerf.train.methods import method_class
 from seenerf.train.session_fit import training_data
-from seenerf.train.threads import resolve_device
 
 __all__ = ["OpenRun", "evaluate_run", "open_run", "orbit_poses", "read_path", "render_run"]
 

@@ -1,4 +1,4 @@
-"""What a fit computes on: its device, and one bound on every CPU thread pool it uses.
+"""How many threads a fit computes with: one bound on every CPU thread pool it uses.
 
 The pools are torch's, the BLAS under numpy and OpenCV's.
 
@@ -17,14 +17,11 @@ import cv2
 import torch
 from threadpoolctl import threadpool_limits
 
-from seenerf.errors import ConfigError
-
 __all__ = [
     "CoreWatch",
     "busy_cores",
     "choose_threads",
     "limit_threads",
-    "resolve_device",
     "threads_beside",
     "threads_for",
 ]
@@ -118,18 +115,3 @@ def choose_threads(requested: int | None) -> tuple[int, str]:
         return cores, f"threads: {cores}, one per core (how busy they are is unknown here)"
     count = threads_beside(busy)
     return count, f"threads: {count} of {cores} cores ({busy:.1f} cores busy with other work)"
-
-
-def resolve_device(name: str) -> str:
-    """``auto`` becomes ``cuda`` when a CUDA device is present, else ``cpu``.
-
-    Raises:
-        ConfigError: ``cuda`` was asked for and none is present.
-    """
-    if name == "auto":
-        return "cuda" if torch.cuda.is_available() else "cpu"
-    if name == "cuda" and not torch.cuda.is_available():
-        raise ConfigError(
-            "device cuda was requested but torch sees no CUDA device; use --device cpu"
-        )
-    return name

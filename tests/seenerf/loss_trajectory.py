@@ -37,7 +37,7 @@ def trajectory(options: dict) -> list[dict]:
     def keep(trainer: Trainer) -> None:
         terms.append(dict(trainer.last_terms))
 
-    Trainer(make_method(scene, config, "cpu"), log=lambda line: None, on_step=keep).train()
+    Trainer(make_method(scene, config), log=lambda line: None, on_step=keep).train()
     return terms
 
 

@@ -25,7 +25,7 @@ def test_a_toy_variant_trains_through_its_own_method(monkeypatch, tiny_scene):
         VARIANTS, "toy", Variant("frames only, events unused", method="frames-only")
     )
     config = FitConfig.of(variant="toy", steps=4, batch_pixels=8, warm_steps=2, threads=1)
-    trainer = Trainer(make_method(tiny_scene, config, "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(tiny_scene, config), log=lambda line: None)
     assert isinstance(trainer.method, FramesOnly)
     before = [p.detach().clone() for p in trainer.model.renderer.parameters()]
     trainer.train()
@@ -37,4 +37,4 @@ def test_a_toy_variant_trains_through_its_own_method(monkeypatch, tiny_scene):
 def test_a_variant_naming_no_method_is_refused(monkeypatch, tiny_scene):
     monkeypatch.setitem(VARIANTS, "lost", Variant("names a method nobody wrote", method="nobody"))
     with pytest.raises(OptionError, match="unknown method 'nobody'; choose one of: recording"):
-        make_method(tiny_scene, FitConfig.of(variant="lost", steps=1), "cpu")
+        make_method(tiny_scene, FitConfig.of(variant="lost", steps=1))

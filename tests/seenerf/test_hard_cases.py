@@ -12,7 +12,7 @@ from seenerf.train.trainer import Trainer
 
 def _check(scene, **overrides):
     config = FitConfig.of(steps=2, batch_pixels=16, warm_steps=0, validation_share=0.0, **overrides)
-    trainer = Trainer(make_method(scene, config, "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(scene, config), log=lambda line: None)
     step = trainer.method.step(trainer.generator)
     loss, terms = step.loss(), step.shown()
     loss.backward()
@@ -117,7 +117,7 @@ def test_a_fit_whose_every_loss_is_nan_fails_instead_of_reporting_success(monkey
     from seenerf.train.trainer import SKIPPED_IN_A_ROW_LIMIT
 
     config = FitConfig.of(steps=200, batch_pixels=16, warm_steps=0, validation_share=0.0)
-    trainer = Trainer(make_method(_scene(), config, "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(_scene(), config), log=lambda line: None)
     calls = []
 
     def sometimes_nan(step):
@@ -134,7 +134,7 @@ def test_a_fit_whose_every_loss_is_nan_fails_instead_of_reporting_success(monkey
 
 def test_isolated_nan_steps_are_skipped_and_counted(monkeypatch):
     config = FitConfig.of(steps=30, batch_pixels=16, warm_steps=0, validation_share=0.0)
-    trainer = Trainer(make_method(_scene(), config, "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(_scene(), config), log=lambda line: None)
     calls = []
 
     def every_third_nan(step):

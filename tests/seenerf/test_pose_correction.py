@@ -50,22 +50,20 @@ def _config(**overrides):
 
 
 def test_training_refines_the_poses_and_a_saved_run_keeps_them(tiny_scene, tmp_path):
-    trainer = Trainer(
-        make_method(tiny_scene, _config(), "cpu"), run_dir=tmp_path, log=lambda line: None
-    )
+    trainer = Trainer(make_method(tiny_scene, _config()), run_dir=tmp_path, log=lambda line: None)
     trainer.train()
     twist = trainer.model.pose_correction.twist.detach()
     assert torch.count_nonzero(twist) == twist.numel()  # every view's every component moved
     assert "poses" in trainer.last_terms
     refined = with_refined_poses(tiny_scene, trainer.model)
     assert not np.allclose(refined.c2w, tiny_scene.c2w)
-    model = make_method(tiny_scene, _config(), "cpu").model
+    model = make_method(tiny_scene, _config()).model
     load_model_state(tmp_path / "checkpoint.pt", model)
     np.testing.assert_array_equal(with_refined_poses(tiny_scene, model).c2w, refined.c2w)
 
 
 def test_without_refinement_or_for_the_oracle_the_poses_are_as_given(tiny_scene):
-    plain = make_method(tiny_scene, _config(refine_poses=False), "cpu").model
+    plain = make_method(tiny_scene, _config(refine_poses=False)).model
     assert plain.pose_correction is None and with_refined_poses(tiny_scene, plain) is tiny_scene
-    oracle = make_method(tiny_scene, _config(variant="oracle"), "cpu").model
+    oracle = make_method(tiny_scene, _config(variant="oracle")).model
     assert oracle.pose_correction is None  # trained at the true poses

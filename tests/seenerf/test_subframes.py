@@ -113,7 +113,7 @@ def test_batches_with_subframes_hold_the_latent_rays_at_every_mth_pose():
 def test_a_fit_with_subframes_predicts_b_counts_and_trains():
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
     config = FitConfig.of(steps=3, batch_pixels=16, warm_steps=0, validation_share=0.0, subframes=2)
-    trainer = Trainer(make_method(scene, config, "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(scene, config), log=lambda line: None)
     batch = trainer.method.frames.sample(4, torch.Generator().manual_seed(0))
     assert batch.origins.shape[1] == 5
     assert trainer.model(batch)[-1].counts.shape == (4, 2)

@@ -96,7 +96,7 @@ def test_a_fit_with_automatic_threads_gives_a_core_up_when_other_work_starts(
     try:
         torch.set_num_threads(2)  # whatever an earlier test left
         config = FitConfig.of(steps=3, batch_pixels=8, warm_steps=2, validation_share=0.1)
-        Trainer(make_method(tiny_scene, config, "cpu"), log=lines.append).train()
+        Trainer(make_method(tiny_scene, config), log=lines.append).train()
         assert torch.get_num_threads() == 1
     finally:
         torch.set_num_threads(before)
@@ -104,7 +104,7 @@ def test_a_fit_with_automatic_threads_gives_a_core_up_when_other_work_starts(
     asked, lines = FitConfig.of(steps=3, batch_pixels=8, warm_steps=2, threads=2), []
     try:
         torch.set_num_threads(2)  # as the fit sets a count asked for
-        Trainer(make_method(tiny_scene, asked, "cpu"), log=lines.append).train()
+        Trainer(make_method(tiny_scene, asked), log=lines.append).train()
         assert torch.get_num_threads() == 2  # and the trainer keeps it
     finally:
         torch.set_num_threads(before)

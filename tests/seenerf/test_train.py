@@ -27,7 +27,7 @@ def _parameters_changed(trainer, before):
 
 @pytest.mark.parametrize("preset", sorted(PRESETS))
 def test_every_preset_trains_a_few_steps(preset, tiny_scene):
-    trainer = Trainer(make_method(tiny_scene, _config(preset=preset), "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(tiny_scene, _config(preset=preset)), log=lambda line: None)
     before = [p.detach().clone() for p in trainer.model.parameters()]
     summary = trainer.train()
     assert summary.steps == 3 and summary.skipped_steps == 0
@@ -36,9 +36,7 @@ def test_every_preset_trains_a_few_steps(preset, tiny_scene):
 
 @pytest.mark.parametrize("variant", sorted(set(VARIANTS) - {"multi-exposure"}))
 def test_every_variant_trains_a_few_steps(variant, tiny_scene):
-    trainer = Trainer(
-        make_method(tiny_scene, _config(variant=variant), "cpu"), log=lambda line: None
-    )
+    trainer = Trainer(make_method(tiny_scene, _config(variant=variant)), log=lambda line: None)
     before = [p.detach().clone() for p in trainer.model.parameters()]
     summary = trainer.train()
     assert summary.steps == 3 and summary.skipped_steps == 0
@@ -57,7 +55,7 @@ def test_every_variant_trains_a_few_steps(variant, tiny_scene):
 )
 def test_the_event_weight_is_the_presets_unless_one_is_stated(preset, stated, used, tiny_scene):
     config = _config(preset=preset, event_weight=stated)
-    trainer = Trainer(make_method(tiny_scene, config, "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(tiny_scene, config), log=lambda line: None)
     assert trainer.preset.event_weight == used
     with pytest.raises(ConfigError, match="--event-weight -0.1 is out of range"):
         FitConfig.of(event_weight=-0.1)
@@ -68,14 +66,14 @@ def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked(
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
     scene.linear_levels = (0.02, 0.9)
-    model = make_method(scene, _config(), "cpu").model  # response "auto" by default
+    model = make_method(scene, _config()).model  # response "auto" by default
     assert isinstance(model.crf, LinearCrf) and model.crf.black == 0.02
-    assert isinstance(make_method(scene, _config(response="learned"), "cpu").model.crf, RgbCrf)
-    assert isinstance(make_method(scene, _config(variant="power-crf"), "cpu").model.crf, PowerCrf)
-    trainer = Trainer(make_method(scene, _config(), "cpu"), log=lambda line: None)
+    assert isinstance(make_method(scene, _config(response="learned")).model.crf, RgbCrf)
+    assert isinstance(make_method(scene, _config(variant="power-crf")).model.crf, PowerCrf)
+    trainer = Trainer(make_method(scene, _config()), log=lambda line: None)
     assert trainer.train().skipped_steps == 0
     scene.linear_levels = None
-    assert isinstance(make_method(scene, _config(), "cpu").model.crf, RgbCrf)
+    assert isinstance(make_method(scene, _config()).model.crf, RgbCrf)
 
 
 @pytest.mark.parametrize(
@@ -132,12 +130,12 @@ def test_linear_frames_of_measured_noise_are_compared_on_the_noise_even_scale():
 
 def test_multi_exposure_needs_and_uses_several_exposures(tiny_scene):
     with pytest.raises(ConfigError, match="at least two exposures"):
-        make_method(tiny_scene, _config(variant="multi-exposure"), "cpu")
+        make_method(tiny_scene, _config(variant="multi-exposure"))
     scene = plane_scene(
         height=8, width=10, frames=3, b=2, exposure_s=np.array([0.004, 0.016, 0.064])
     )
     summary = Trainer(
-        make_method(scene, _config(variant="multi-exposure"), "cpu"), log=lambda line: None
+        make_method(scene, _config(variant="multi-exposure")), log=lambda line: None
     ).train()
     assert summary.steps == 3
 
@@ -146,14 +144,12 @@ def test_oracle_needs_truth(tiny_scene):
     scene = plane_scene(height=8, width=10, frames=3, b=2)
     scene.truth = None
     with pytest.raises(ConfigError, match="ground truth"):
-        make_method(scene, _config(variant="oracle"), "cpu")
+        make_method(scene, _config(variant="oracle"))
 
 
 def test_oracle_validation_scores_its_own_sharp_hdr_supervision():
     scene = plane_scene(height=24, width=32, frames=4, b=2, test_views=1)
-    trainer = Trainer(
-        make_method(scene, _config(variant="oracle", steps=200, batch_pixels=None), "cpu")
-    )
+    trainer = Trainer(make_method(scene, _config(variant="oracle", steps=200, batch_pixels=None)))
     before = trainer.validation_psnr()
     trainer.train()
     after = trainer.validation_psnr()
@@ -178,37 +174,33 @@ def test_field_resolution_follows_the_pixel_span_within_its_bounds():
 
 
 def test_killed_fit_resumes_in_place(tiny_scene, tmp_path):
-    Trainer(
-        make_method(tiny_scene, _config(steps=2), "cpu"), tmp_path, log=lambda line: None
-    ).train()
+    Trainer(make_method(tiny_scene, _config(steps=2)), tmp_path, log=lambda line: None).train()
     lines = []
-    resumed = Trainer(make_method(tiny_scene, _config(steps=5), "cpu"), tmp_path, log=lines.append)
+    resumed = Trainer(make_method(tiny_scene, _config(steps=5)), tmp_path, log=lines.append)
     assert resumed.train().steps == 5
     assert any("resuming at step 2" in line for line in lines)
     with pytest.raises(CheckpointError, match="--fresh"):
-        Trainer(make_method(tiny_scene, _config(steps=5, seed=1), "cpu"), tmp_path).train()
+        Trainer(make_method(tiny_scene, _config(steps=5, seed=1)), tmp_path).train()
 
 
 def test_damaged_checkpoint_is_a_typed_error(tiny_scene, tmp_path):
     (tmp_path / "checkpoint.pt").write_bytes(b"not a checkpoint")
     with pytest.raises(CheckpointError, match="not a readable"):
-        Trainer(make_method(tiny_scene, _config(), "cpu"), tmp_path).train()
+        Trainer(make_method(tiny_scene, _config()), tmp_path).train()
 
 
 def test_checkpoint_of_another_model_is_a_typed_error(tiny_scene, tmp_path):
     from seenerf.train.checkpoint import load_model_state
 
-    Trainer(
-        make_method(tiny_scene, _config(steps=1), "cpu"), tmp_path, log=lambda line: None
-    ).train()
-    other = make_method(tiny_scene, _config(variant="base"), "cpu").model
+    Trainer(make_method(tiny_scene, _config(steps=1)), tmp_path, log=lambda line: None).train()
+    other = make_method(tiny_scene, _config(variant="base")).model
     with pytest.raises(CheckpointError, match=r"(?s)do not fit this version's model.*--fresh"):
         load_model_state(tmp_path / "checkpoint.pt", other)
 
 
 def test_time_budget_stops_training(tiny_scene):
     summary = Trainer(
-        make_method(tiny_scene, _config(steps=10_000, time_budget_s=0.5), "cpu"),
+        make_method(tiny_scene, _config(steps=10_000, time_budget_s=0.5)),
         log=lambda line: None,
     ).train()
     assert summary.stopped == "budget" and summary.steps < 10_000
@@ -221,7 +213,7 @@ def _field_lr_at(trainer, steps, elapsed_s):
 
 
 def test_learning_rate_falls_with_the_steps_of_a_run_without_budget(tiny_scene):
-    trainer = Trainer(make_method(tiny_scene, _config(steps=6000), "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(tiny_scene, _config(steps=6000)), log=lambda line: None)
     decay, base = trainer.preset.lr_decay_steps, trainer.preset.lr
     assert _field_lr_at(trainer, 0, 0.0) == pytest.approx(base)
     assert _field_lr_at(trainer, 3000, 1e6) == pytest.approx(base * 0.1 ** (3000 / decay))
@@ -230,7 +222,7 @@ def test_learning_rate_falls_with_the_steps_of_a_run_without_budget(tiny_scene):
 def test_a_run_its_budget_stops_first_anneals_only_as_far_as_its_steps(tiny_scene):
     # 100 s budget, 60 s already spent on poses: 40 s of training is the whole run.
     trainer = Trainer(
-        make_method(tiny_scene, _config(steps=6000, time_budget_s=100.0), "cpu"),
+        make_method(tiny_scene, _config(steps=6000, time_budget_s=100.0)),
         log=lambda line: None,
         spent_s=60.0,
     )
@@ -244,7 +236,7 @@ def test_a_run_its_budget_stops_first_anneals_only_as_far_as_its_steps(tiny_scen
 
 def test_a_budget_without_a_step_count_runs_past_the_presets_steps(tiny_scene):
     trainer = Trainer(
-        make_method(tiny_scene, _config(steps=None, time_budget_s=100.0), "cpu"),
+        make_method(tiny_scene, _config(steps=None, time_budget_s=100.0)),
         log=lambda line: None,
         spent_s=60.0,
     )
@@ -263,7 +255,7 @@ def test_a_budget_without_a_step_count_runs_past_the_presets_steps(tiny_scene):
 
 
 def test_a_plateau_stops_a_run_only_in_the_second_half_of_its_schedule(tiny_scene):
-    trainer = Trainer(make_method(tiny_scene, _config(steps=1000), "cpu"), log=lambda line: None)
+    trainer = Trainer(make_method(tiny_scene, _config(steps=1000)), log=lambda line: None)
     trainer.evals_since_best = trainer.preset.patience
     trainer.summary.steps = 400  # the rate has not fallen far yet: keep going
     assert not trainer.plateaued()
@@ -285,7 +277,7 @@ def test_sigterm_saves_the_step_it_was_at_and_the_fit_resumes_there(tiny_scene, 
             os.kill(os.getpid(), signal.SIGTERM)
 
     trainer = Trainer(
-        make_method(tiny_scene, _config(steps=50), "cpu"),
+        make_method(tiny_scene, _config(steps=50)),
         tmp_path,
         lambda line: None,
         0.0,
@@ -299,13 +291,13 @@ def test_sigterm_saves_the_step_it_was_at_and_the_fit_resumes_there(tiny_scene, 
     assert _read(tmp_path / "checkpoint.pt")["steps"] == 3
     assert signal.getsignal(signal.SIGTERM) is not None  # the handler is given back
     lines = []
-    resumed = Trainer(make_method(tiny_scene, _config(steps=5), "cpu"), tmp_path, lines.append)
+    resumed = Trainer(make_method(tiny_scene, _config(steps=5)), tmp_path, lines.append)
     assert resumed.train().steps == 5 and any("resuming at step 3" in line for line in lines)
 
 
 def test_progress_line_reports_losses_psnr_rate_and_eta(tiny_scene):
     lines = []
-    trainer = Trainer(make_method(tiny_scene, _config(steps=4), "cpu"), log=lines.append)
+    trainer = Trainer(make_method(tiny_scene, _config(steps=4)), log=lines.append)
     trainer.preset = type(trainer.preset)(**{**trainer.preset.__dict__, "eval_every": 2})
     trainer.train()
     assert len(lines) == 2
@@ -334,7 +326,7 @@ def test_oracle_ldr_views_use_the_true_response():
     from seenerf.data.synthetic import true_response
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
-    model = make_method(scene, _config(variant="oracle"), "cpu").model
+    model = make_method(scene, _config(variant="oracle")).model
     log_radiance = torch.tensor([[-4.0, -2.0, 1.5]])
     expected = true_response(np.array([-4.0, -2.0, 1.5]) + np.log(0.064))
     np.testing.assert_allclose(
@@ -344,7 +336,7 @@ def test_oracle_ldr_views_use_the_true_response():
 
 def test_whole_image_ldr_matches_the_response_per_pixel():
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
-    model = make_method(scene, _config(), "cpu").model
+    model = make_method(scene, _config()).model
     with torch.no_grad():
         model.crf.weight_in.mul_(4.0)  # kinks steeper than the warm start's
     log_radiance = torch.linspace(-12.0, 6.0, 6000).reshape(2000, 3)
@@ -359,9 +351,7 @@ def test_whole_image_ldr_matches_the_response_per_pixel():
 def test_a_full_disk_keeps_the_previous_checkpoint(tiny_scene, tmp_path, monkeypatch):
     from seenerf.train.checkpoint import save_checkpoint
 
-    trainer = Trainer(
-        make_method(tiny_scene, _config(steps=2), "cpu"), tmp_path, log=lambda line: None
-    )
+    trainer = Trainer(make_method(tiny_scene, _config(steps=2)), tmp_path, log=lambda line: None)
     trainer.train()
     before = (tmp_path / "checkpoint.pt").read_bytes()
 
@@ -375,9 +365,7 @@ def test_a_full_disk_keeps_the_previous_checkpoint(tiny_scene, tmp_path, monkeyp
     assert (tmp_path / "checkpoint.pt").read_bytes() == before
     assert not (tmp_path / "checkpoint.tmp").exists()
     monkeypatch.undo()
-    resumed = Trainer(
-        make_method(tiny_scene, _config(steps=3), "cpu"), tmp_path, log=lambda line: None
-    )
+    resumed = Trainer(make_method(tiny_scene, _config(steps=3)), tmp_path, log=lambda line: None)
     assert resumed.train().steps == 3  # resumed from step 2, one more step
 
 
@@ -386,9 +374,7 @@ def test_the_budget_keeps_room_for_the_renders_and_scores_after_training(tiny_sc
 
     lines = []
     trainer = Trainer(
-        make_method(
-            tiny_scene, _config(steps=None, time_budget_s=100.0, validation_share=0.2), "cpu"
-        ),
+        make_method(tiny_scene, _config(steps=None, time_budget_s=100.0, validation_share=0.2)),
         log=lines.append,
         spent_s=60.0,
     )
