@@ -1,4 +1,4 @@
-"""Builds the model of a (preset, variant) pair for one scene: box, field size, sensor parts."""
+"""The model of a (preset, variant) pair for one scene, on its device: box, field, sensor parts."""
 
 from __future__ import annotations
 
