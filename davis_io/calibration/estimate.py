@@ -10,6 +10,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import cached_property
+from itertools import takewhile
 
 import numpy as np
 
@@ -235,12 +236,18 @@ def _best_latency(
         first ones, then its longer ones while the best is the last one tried.
     """
     tried, costs = [], []
-    for latency in grid.first + grid.longer:
-        if len(tried) >= len(grid.first) and int(np.argmin(costs)) < len(costs) - 1:
-            break
+
+    def profile(latency: int) -> None:
         tried.append(latency)
         costs.append(problems.at(latency, factors).disagreement(*theta))
         progress(f"latency {latency / 1000:g} ms: disagreement {costs[-1]:.4f} events²")
+
+    for latency in grid.first:
+        profile(latency)
+    for latency in grid.longer:
+        if int(np.argmin(costs)) < len(costs) - 1:
+            break
+        profile(latency)
     costs = np.asarray(costs)
     best = int(np.argmin(costs))
     if 0 < best < len(costs) - 1:  # the parabola's vertex through the best and its neighbours
@@ -376,9 +383,10 @@ def _latency_grid(recording: CalibrationInput) -> _LatencyGrid:
         first = tuple(
             latency for latency in LATENCIES_US if np.array_equal(recording.pairs(latency), pairs)
         )
-    clear = [bool(np.all(recording.pairs(latency)[pairs])) for latency in LONGER_LATENCIES_US]
-    longer = LONGER_LATENCIES_US[: clear.index(False) if False in clear else len(clear)]
-    return _LatencyGrid(pairs, first, longer if first and first[-1] == LATENCIES_US[-1] else ())
+    if not first or first[-1] != LATENCIES_US[-1]:
+        return _LatencyGrid(pairs, first, ())
+    clear = takewhile(lambda latency: recording.pairs(latency)[pairs].all(), LONGER_LATENCIES_US)
+    return _LatencyGrid(pairs, first, tuple(clear))
 
 
 @dataclass
