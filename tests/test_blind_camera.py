@@ -27,7 +27,7 @@ from seenerf.train.fit import resolved_settings
 from seenerf.train.methods import make_method
 from seenerf.train.trainer import Trainer
 
-SMALL = dict(frames=6, test_views=1, baseline_m=0.18, width=173, height=130, focal_px=140.0)
+SMALL = dict(frames=4, test_views=1, baseline_m=0.18, width=173, height=130, focal_px=140.0)
 
 
 @pytest.fixture(scope="module")
@@ -170,7 +170,7 @@ def test_a_saved_run_renders_and_scores_in_a_new_process_as_the_fit_did(twins):
     # run (differences of 1e-6), which would hide nothing the saved state itself changes.
     result = fit_session(
         emulated,
-        FitConfig.of(steps=3, warm_steps=10, threads=1),
+        FitConfig.of(steps=3, warm_steps=10, threads=1, register_test_views=False),
         run_name="saved",
         log=lambda line: None,
     )

@@ -52,10 +52,10 @@ def prepare_and_fit(
     estimated again.
     """
     book = LogBook(log)  # the calibration's and poses' lines go into the run's log.txt too
+    bins = session_bins(session_dir, config)  # a folder without a session: before cores are timed
     threads, why = choose_threads(config.schedule.threads)
     limit_threads(threads)
     book(why)
-    bins = session_bins(session_dir, config)
     budget_s = config.schedule.time_budget_s
     if budget_s is not None:
         plan = estimate_preparation(session_dir, bins)
