@@ -240,18 +240,18 @@ def _best_latency(
     def cost(latency: int) -> float:
         return problems.at(latency, factors).disagreement(*theta)
 
-    def profile(latencies: tuple[int, ...], found) -> None:
-        for latency, value in zip(latencies, found, strict=True):
-            tried.append(latency)
-            costs.append(value)
-            progress(f"latency {latency / 1000:g} ms: disagreement {value:.4f} events²")
+    def keep(latency: int, value: float) -> None:
+        tried.append(latency)
+        costs.append(value)
+        progress(f"latency {latency / 1000:g} ms: disagreement {value:.4f} events²")
 
     with ThreadPoolExecutor(usable_cores()) as pool:  # numpy lets go of the interpreter
-        profile(grid.first, pool.map(cost, grid.first))
+        for latency, value in zip(grid.first, pool.map(cost, grid.first), strict=True):
+            keep(latency, value)
     for latency in grid.longer:
         if int(np.argmin(costs)) < len(costs) - 1:
             break
-        profile((latency,), (cost(latency),))
+        keep(latency, cost(latency))
     costs = np.asarray(costs)
     best = int(np.argmin(costs))
     if 0 < best < len(costs) - 1:  # the parabola's vertex through the best and its neighbours
