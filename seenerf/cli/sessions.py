@@ -9,6 +9,7 @@ from pathlib import Path
 
 from davis_io import describe_error
 from davis_io.prepare import estimate_preparation, prepare_session
+from davis_io.session import read_manifest
 from seenerf.errors import TrainingStopped
 from seenerf.model.config import FitConfig
 from seenerf.train.fit import FitResult, LogBook
@@ -52,10 +53,11 @@ def prepare_and_fit(
     estimated again.
     """
     book = LogBook(log)  # the calibration's and poses' lines go into the run's log.txt too
-    bins = session_bins(session_dir, config)  # a folder without a session: before cores are timed
+    read_manifest(session_dir)  # a folder without a session fails before the cores are timed
     threads, why = choose_threads(config.schedule.threads)
     limit_threads(threads)
     book(why)
+    bins = session_bins(session_dir, config)
     budget_s = config.schedule.time_budget_s
     if budget_s is not None:
         plan = estimate_preparation(session_dir, bins)

@@ -73,6 +73,7 @@ def test_fit_verb_prepares_the_session_then_passes_the_contrast_threshold(monkey
         raise SystemExit(0)
 
     monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", fake_prepare)
+    monkeypatch.setattr(seenerf.cli.sessions, "read_manifest", lambda session: None)
     monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)
     monkeypatch.setattr(seenerf.cli.sessions, "fit_session", fake_fit_session)
     parser = argparse.ArgumentParser()
@@ -110,6 +111,7 @@ def test_a_fits_log_holds_the_preparation_and_its_config_the_software(monkeypatc
         return 1.0
 
     monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", fake_prepare)
+    monkeypatch.setattr(seenerf.cli.sessions, "read_manifest", lambda session: None)
     monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 2)
     monkeypatch.setattr("seenerf.train.session_fit.session_bins", lambda session, config: 2)
     monkeypatch.setattr("seenerf.train.session_fit.training_data", lambda *a, **k: scene)
@@ -143,6 +145,7 @@ def test_a_fit_with_a_budget_says_what_its_preparation_should_take_first(monkeyp
     estimate = preparation_seconds(24_000_000, 16, 5, calibrated=False, posed=False)
     monkeypatch.setattr(seenerf.cli.sessions, "estimate_preparation", lambda folder, b: estimate)
     monkeypatch.setattr(seenerf.cli.sessions, "prepare_session", fake_prepare)
+    monkeypatch.setattr(seenerf.cli.sessions, "read_manifest", lambda session: None)
     monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)
     shown = []
     with pytest.raises(Stop):
@@ -170,6 +173,7 @@ def test_a_stopped_fit_exits_143_with_one_line(monkeypatch, tmp_path, capsys):
         "prepare_session",
         lambda session, b, log=print, camera_calibration=None, threads=0: 0.0,
     )
+    monkeypatch.setattr(seenerf.cli.sessions, "read_manifest", lambda session: None)
     monkeypatch.setattr(seenerf.cli.sessions, "session_bins", lambda session, config: 4)
     monkeypatch.setattr(seenerf.cli.sessions, "fit_session", stopped)
     assert main(["fit", str(tmp_path), "--quiet"]) == 143

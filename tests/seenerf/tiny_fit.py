@@ -10,6 +10,7 @@ from seenerf.data.synthetic import plane_scene
 
 if __name__ == "__main__":
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
+    seenerf.cli.sessions.read_manifest = lambda session: None
     seenerf.cli.sessions.prepare_session = lambda session, b, log, camera_calibration, threads: 0.0
     seenerf.cli.sessions.session_bins = lambda session, config: 2
     seenerf.train.session_fit.session_bins = seenerf.cli.sessions.session_bins
