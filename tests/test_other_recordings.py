@@ -5,6 +5,8 @@ only within 3 ms of an exposure (a recording made view by view), the camera held
 frames. Calibration, poses and a default fit must complete; what could not be measured is said.
 """
 
+import json
+
 import numpy as np
 import pytest
 
@@ -72,6 +74,8 @@ def test_what_could_not_be_measured_is_assumed_and_said(view_by_view):
     with Session.open(folder) as session:
         calibration = session.calibration()
     assert calibration.source == "assumed" and "thresholds" in calibration.assumed
+    # The response was fitted beside those thresholds: not measured either.
+    assert "response" in calibration.assumed and not calibration.response_linear
     assert any("thresholds not measured" in line for line in lines)
     # No stored value sits at a search bound.
     low, high = THRESHOLD_RANGE
@@ -85,12 +89,14 @@ def test_the_default_fit_completes_and_renders(view_by_view):
     folder, _ = view_by_view
     result = fit_session(folder, FitConfig.of(steps=3, warm_steps=10), log=lambda line: None)
     assert (result.run_dir / "renders" / "hdr").is_dir()
+    # Frames never linked by events leave the response unmeasured: the few-number S-curve.
+    settings = json.loads((result.run_dir / "config.json").read_text())
+    assert settings["rgb_response"] == "MonotoneCrf"
     assert result.summary.steps == 3 and result.summary.skipped_steps == 0
     assert "hdr" in result.metrics  # scored against the emulator's truth
 
 
 def test_a_session_whose_every_exposure_lost_events_is_fitted_whole(view_by_view, tmp_path):
-    import json
     import shutil
 
     from seenerf.data.session import load_training_data

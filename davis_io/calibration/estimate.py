@@ -594,8 +594,16 @@ def _reviewed_response(
     """The frames' black and clip levels and whether their response is linear.
 
     A linear response needs a black level a DAVIS can have: one its search had to put below
-    zero means the curve is not the line it looked like.
+    zero means the curve is not the line it looked like. A curve fitted beside thresholds the
+    fit could not measure is not measured either: the two trade against each other.
     """
+    if "thresholds" in notes:
+        notes.add(
+            "response",
+            "it was fitted beside thresholds that were not measured",
+            "an S-curve the fit learns, black at 0",
+        )
+        return levels.black_level, levels.saturation, False
     pile_up = levels.black_level if levels.black_level > 0 else None
     black, power, straightness = linear_fit(found.response, pile_up)
     is_linear = straightness < LINEAR_RMS
@@ -608,7 +616,7 @@ def _reviewed_response(
             "response",
             f"the free curve is straight only in ln(v - {black:.3f}), below any black level a "
             "frame can have",
-            "a response the fit learns, black at 0",
+            "an S-curve the fit learns, black at 0",
         )
         is_linear = False
     return levels.black_level or (black if is_linear else 0.0), levels.saturation, is_linear
@@ -625,7 +633,7 @@ def _without_consistency(
     notes.add("thresholds", why, _NOMINAL)
     notes.add("latency_us", why, "no latency (0 ms)")
     notes.add("pixel_factors", why, "every pixel's factor 1")
-    notes.add("response", why, "a response the fit learns")
+    notes.add("response", why, "an S-curve the fit learns")
     return SensorCalibration(
         threshold_on=float(theta[0]),
         threshold_off=float(theta[1]),

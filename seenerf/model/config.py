@@ -70,7 +70,9 @@ class SensorConfig:
     Attributes:
         response: the RGB response of the variants that learn one: ``auto`` (linear above the
             black level and clipped, when the calibration measured the frames linear as a raw
-            DAVIS frame is; else learned) or ``learned`` (always the response MLPs).
+            DAVIS frame is; monotone, when it could not measure the response; else learned),
+            ``learned`` (always the response MLPs) or ``monotone`` (always a rising S-curve of
+            three numbers per channel).
         anchor_weight: weight of the CRF anchor term.
         anchor_log_exposure: ln(radiance x s) of the CRF anchor point.
         anchor_value: LDR value of the CRF at the anchor point.
@@ -206,7 +208,7 @@ _EXPOSURE = Bounds(1e-6, 30 * 86_400.0, "s")
 """An exposure of the rendered brackets."""
 
 _CHOICES: dict[str, tuple[str, ...]] = {
-    "response": ("auto", "learned"),
+    "response": ("auto", "learned", "monotone"),
     "device": ("auto", "cpu", "cuda"),
 }
 

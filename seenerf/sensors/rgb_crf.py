@@ -12,6 +12,7 @@ from seenerf.errors import ConfigError
 
 __all__ = [
     "LinearCrf",
+    "MonotoneCrf",
     "PowerCrf",
     "RgbCrf",
     "TabulatedCrf",
@@ -48,6 +49,40 @@ def apply_rgb_crf(
 def apply_power_crf(log_exposure: torch.Tensor, exponent: torch.Tensor) -> torch.Tensor:
     """EvHDR-GS response ``min(x^a, 1)``, x = radiance x seconds, one exponent for all channels."""
     return torch.exp(exponent * log_exposure).clamp(max=1.0)
+
+
+def apply_monotone_crf(
+    log_exposure: torch.Tensor,
+    slopes: torch.Tensor,
+    offset: torch.Tensor,
+    knots: tuple[float, float],
+    anchor_log_exposure: float,
+) -> torch.Tensor:
+    """LDR value of each channel: ``sigmoid(offset + h(x) - h(anchor))``, ``h`` rising.
+
+    ``h``'s slope goes linearly from ``slopes[:, 0]`` at the first knot to ``slopes[:, 1]`` at
+    the second (both positive) and stays at each beyond its knot, so ``h`` is quadratic
+    between the knots and straight outside.
+
+    Args:
+        log_exposure: ``(..., 3)`` ln(radiance x seconds) per channel.
+        slopes: ``(3, 2)`` positive slopes of ``h`` at the two knots.
+        offset: ``(3,)`` the pre-sigmoid value at the anchor.
+        knots: the two knots' ln exposures, increasing.
+        anchor_log_exposure: where ``h`` is zero.
+    """
+    low, high = knots
+    width = high - low
+    start, end = slopes[:, 0], slopes[:, 1]
+
+    def rise(x: torch.Tensor) -> torch.Tensor:
+        from_low = x - low
+        inside = from_low.clamp(0.0, width)
+        past = (from_low - width).clamp(min=0.0)
+        return start * from_low + (end - start) * (inside.square() / (2 * width) + past)
+
+    anchor = torch.full_like(offset, anchor_log_exposure)
+    return torch.sigmoid(offset + rise(log_exposure) - rise(anchor))
 
 
 def interpolate_response(
@@ -117,6 +152,48 @@ class RgbCrf(nn.Module):
     def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
         """Fit ``clip(softplus(x), 0, 1)`` on x ~ U[-3, 3] with its own Adam; return last loss."""
         return warm_start_module(self, steps, lr, seed, channels=3)
+
+
+class MonotoneCrf(nn.Module):
+    """A rising S-curve of three numbers per channel (:func:`apply_monotone_crf`).
+
+    For frames of one exposure whose response the calibration could not measure: there, the
+    MLPs of :class:`RgbCrf` bend to fit the frames as well at a compressed field contrast as
+    at the true one, and the fit lands on the compressed one. Two slopes and an offset cannot
+    bend that way. It starts as ``sigmoid(x - anchor)``, a slope of 1 everywhere.
+
+    Args:
+        anchor_log_exposure: ln(radiance x seconds) of the anchor point.
+        anchor_value: LDR value the anchor must map to.
+    """
+
+    SPAN = 9.0
+    """The knots lie this far below and above the anchor, in ln exposure (e^9: about 8,100)."""
+
+    def __init__(self, anchor_log_exposure: float = 0.0, anchor_value: float = 0.5):
+        super().__init__()
+        unit_slope = math.log(math.e - 1.0)  # softplus of it is 1
+        self.raw_slopes = nn.Parameter(torch.full((3, 2), unit_slope))
+        self.offset = nn.Parameter(torch.zeros(3))
+        self.anchor_log_exposure = float(anchor_log_exposure)
+        self.anchor_value = float(anchor_value)
+        self.knots = (self.anchor_log_exposure - self.SPAN, self.anchor_log_exposure + self.SPAN)
+
+    def forward(self, log_exposure: torch.Tensor) -> torch.Tensor:
+        """See :func:`apply_monotone_crf`."""
+        slopes = F.softplus(self.raw_slopes)
+        return apply_monotone_crf(
+            log_exposure, slopes, self.offset, self.knots, self.anchor_log_exposure
+        )
+
+    def anchor_loss(self) -> torch.Tensor:
+        """Squared error of CRF(anchor) against the anchor value, mean over the three channels."""
+        point = self.offset.new_full((3,), self.anchor_log_exposure)
+        return (self(point) - self.anchor_value).square().mean()
+
+    def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
+        """It starts as a sigmoid already; nothing to warm up."""
+        return 0.0
 
 
 class PowerCrf(nn.Module):

@@ -19,7 +19,7 @@ from seenerf.model.variants import LOW_PASS_READINGS, VARIANTS
 from seenerf.render.frustum import forward_facing_space, frustum_box
 from seenerf.render.rays import in_any_view, scene_box_from_cameras
 from seenerf.render.renderer import RadianceRenderer
-from seenerf.sensors.rgb_crf import LinearCrf, RgbCrf, TabulatedCrf
+from seenerf.sensors.rgb_crf import LinearCrf, MonotoneCrf, RgbCrf, TabulatedCrf
 
 __all__ = [
     "build_model",
@@ -47,9 +47,10 @@ def resolve_device(name: str) -> str:
 def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.Module | None:
     """The variant's RGB response for this session.
 
-    The truth's table for the oracle; for the learned response, the linear one instead when
-    the calibration measured linear frames (a raw DAVIS frame) and ``config.sensor.response`` is
-    ``auto``; else the variant's class with the anchor.
+    The truth's table for the oracle. For the learned response, as ``config.sensor.response``
+    says: ``learned`` the MLPs, ``monotone`` the S-curve; ``auto`` the linear one when the
+    calibration measured linear frames (a raw DAVIS frame), the S-curve when it could not
+    measure the response, else the MLPs.
 
     A linear response whose measured levels cannot hold the anchor falls back to the learned
     one, with a warning: a calibration verdict never stops a fit.
@@ -70,7 +71,11 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
         "anchor_log_exposure": config.sensor.anchor_log_exposure,
         "anchor_value": config.sensor.anchor_value,
     }
-    if crf is RgbCrf and config.sensor.response == "auto" and data.linear_levels is not None:
+    if crf is not RgbCrf or config.sensor.response == "learned":
+        return crf(**anchor)
+    if config.sensor.response == "monotone":
+        return MonotoneCrf(**anchor)
+    if data.linear_levels is not None:
         if LinearCrf.fits(*data.linear_levels, config.sensor.anchor_value):
             return LinearCrf(*data.linear_levels, **anchor)
         black, saturation = data.linear_levels
@@ -80,7 +85,7 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
             f"{config.sensor.anchor_value}: the response is learned instead",
             stacklevel=2,
         )
-    return crf(**anchor)
+    return RgbCrf(**anchor) if data.response_measured else MonotoneCrf(**anchor)
 
 
 def build_model(

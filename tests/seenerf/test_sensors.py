@@ -17,6 +17,7 @@ from seenerf.sensors.event_crf import (
 from seenerf.sensors.exposure import blur_log_radiance
 from seenerf.sensors.rgb_crf import (
     LinearCrf,
+    MonotoneCrf,
     PowerCrf,
     RgbCrf,
     TabulatedCrf,
@@ -81,6 +82,28 @@ def test_rgb_crf_warm_start_reaches_reference_curve():
     x = torch.linspace(-3, 3, 61)[:, None].expand(-1, 3)
     error = (crf(x) - warm_start_target(x)).abs().max()
     assert error < 0.08
+
+
+def test_the_monotone_response_follows_its_two_slopes_and_always_rises():
+    crf = MonotoneCrf(anchor_log_exposure=0.0, anchor_value=0.5)
+    x = torch.tensor([-20.0, -3.0, 0.0, 3.0, 20.0])[:, None].expand(-1, 3)
+    start = torch.sigmoid(x)
+    assert torch.allclose(crf(x), start)  # slope 1 at both knots: sigmoid(x - anchor)
+    assert float(crf.anchor_loss().detach()) == 0.0
+    with torch.no_grad():
+        crf.raw_slopes[:, 1] = math.log(math.e**3 - 1.0)  # slopes 1 at -9 and 3 at +9
+    # By hand: the slope is 1 + (u + 9) / 9 between the knots, so h(9) = 9 + 13.5 = 22.5,
+    # h(-9) = -(9 + 4.5) = -13.5, and beyond the upper knot it rises by 3 per unit.
+    at = torch.tensor([-10.0, -9.0, 0.0, 9.0, 10.0])[:, None].expand(-1, 3)
+    expected = torch.sigmoid(torch.tensor([-14.5, -13.5, 0.0, 22.5, 25.5]))
+    assert torch.allclose(crf(at)[:, 0].double().logit(), expected.double().logit(), atol=1e-3)
+    with torch.no_grad():
+        crf.raw_slopes.copy_(torch.tensor([[-30.0, 4.0], [2.0, -30.0], [0.0, 0.0]]))
+    dense = torch.linspace(-40, 40, 4001, dtype=torch.float64)[:, None].expand(-1, 3)
+    values = crf.double()(dense)
+    # Rising for any slopes, even nearly flat ones (to rounding, where the curve is flat).
+    assert (values[1:] - values[:-1] >= -1e-12).all()
+    assert (values[-1] - values[0] > 0.5).all()
 
 
 def test_anchor_loss_is_zero_for_a_curve_through_the_anchor():

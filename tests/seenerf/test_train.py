@@ -61,8 +61,8 @@ def test_the_event_weight_is_the_presets_unless_one_is_stated(preset, stated, us
         FitConfig.of(event_weight=-0.1)
 
 
-def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked():
-    from seenerf.sensors.rgb_crf import LinearCrf, PowerCrf, RgbCrf
+def test_the_response_is_linear_for_linear_frames_monotone_where_unmeasured_else_learned():
+    from seenerf.sensors.rgb_crf import LinearCrf, MonotoneCrf, PowerCrf, RgbCrf
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
     scene.linear_levels = (0.02, 0.9)
@@ -72,8 +72,12 @@ def test_frames_measured_linear_get_the_linear_response_unless_learned_is_asked(
     assert isinstance(make_method(scene, _config(variant="power-crf")).model.crf, PowerCrf)
     trainer = Trainer(make_method(scene, _config()), log=lambda line: None)
     assert trainer.train().skipped_steps == 0
+    assert isinstance(make_method(scene, _config(response="monotone")).model.crf, MonotoneCrf)
     scene.linear_levels = None
     assert isinstance(make_method(scene, _config()).model.crf, RgbCrf)
+    scene.response_measured = False  # frames never linked by events
+    assert isinstance(make_method(scene, _config()).model.crf, MonotoneCrf)
+    assert isinstance(make_method(scene, _config(response="learned")).model.crf, RgbCrf)
 
 
 @pytest.mark.parametrize(
