@@ -601,7 +601,7 @@ def _reviewed_response(
         notes.add(
             "response",
             "it was fitted beside thresholds that were not measured",
-            "an S-curve the fit learns, black at 0",
+            "a response the fit learns, black at 0",
         )
         return levels.black_level, levels.saturation, False
     pile_up = levels.black_level if levels.black_level > 0 else None
@@ -616,7 +616,7 @@ def _reviewed_response(
             "response",
             f"the free curve is straight only in ln(v - {black:.3f}), below any black level a "
             "frame can have",
-            "an S-curve the fit learns, black at 0",
+            "a response the fit learns, black at 0",
         )
         is_linear = False
     return levels.black_level or (black if is_linear else 0.0), levels.saturation, is_linear
@@ -633,7 +633,7 @@ def _without_consistency(
     notes.add("thresholds", why, _NOMINAL)
     notes.add("latency_us", why, "no latency (0 ms)")
     notes.add("pixel_factors", why, "every pixel's factor 1")
-    notes.add("response", why, "an S-curve the fit learns")
+    notes.add("response", why, "a response the fit learns")
     return SensorCalibration(
         threshold_on=float(theta[0]),
         threshold_off=float(theta[1]),

@@ -104,8 +104,6 @@ class TrainingData:
         polarity_scale: the calibrated ON and OFF thresholds over ``threshold``.
         linear_levels: ``(black, saturation)`` normalised, when the calibration measured frames
             linear in exposure (a raw DAVIS frame); None otherwise.
-        response_measured: the calibration measured the frames' response, linear or not
-            (False: frames never linked by events, or a curve no pixel can have).
         noise_offset: for linear frames whose noise was measured, the value above black where
             their shot noise equals their read noise (normalised); 0 otherwise.
         test: held-out views with truth, if any.
@@ -129,7 +127,6 @@ class TrainingData:
     dead_time_s: float = 0.0
     polarity_scale: tuple[float, float] = (1.0, 1.0)
     linear_levels: tuple[float, float] | None = None
-    response_measured: bool = True
     noise_offset: float = 0.0
     distortion: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
     test: TestViews | None = None

@@ -123,7 +123,6 @@ def load_training_data(
             if calibration.response_linear
             else None,
             noise_offset=calibration.noise_offset if calibration.response_linear else 0.0,
-            response_measured="response" not in calibration.assumed,
         )
         truth = session.truth()
         if truth is not None:

@@ -70,9 +70,8 @@ class SensorConfig:
     Attributes:
         response: the RGB response of the variants that learn one: ``auto`` (linear above the
             black level and clipped, when the calibration measured the frames linear as a raw
-            DAVIS frame is; monotone, when it could not measure the response; else learned),
-            ``learned`` (always the response MLPs) or ``monotone`` (always a rising S-curve of
-            three numbers per channel).
+            DAVIS frame is; else learned), ``learned`` (always the response MLPs) or
+            ``monotone`` (a rising S-curve of three numbers per channel instead of the MLPs).
         anchor_weight: weight of the CRF anchor term.
         anchor_log_exposure: ln(radiance x s) of the CRF anchor point.
         anchor_value: LDR value of the CRF at the anchor point.

@@ -157,10 +157,10 @@ class RgbCrf(nn.Module):
 class MonotoneCrf(nn.Module):
     """A rising S-curve of three numbers per channel (:func:`apply_monotone_crf`).
 
-    For frames of one exposure whose response the calibration could not measure: there, the
-    MLPs of :class:`RgbCrf` bend to fit the frames as well at a compressed field contrast as
-    at the true one, and the fit lands on the compressed one. Two slopes and an offset cannot
-    bend that way. It starts as ``sigmoid(x - anchor)``, a slope of 1 everywhere.
+    The alternative to :class:`RgbCrf`'s MLPs (``--response monotone``): it can only rise and
+    bend smoothly. It starts as ``sigmoid(x - anchor)``, a slope of 1 everywhere, and needs no
+    warm start. Frames of one exposure never linked by events hardly move it from there, so on
+    them it acts as a prior on how many ln units the frames' values span.
 
     Args:
         anchor_log_exposure: ln(radiance x seconds) of the anchor point.

@@ -49,8 +49,7 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
 
     The truth's table for the oracle. For the learned response, as ``config.sensor.response``
     says: ``learned`` the MLPs, ``monotone`` the S-curve; ``auto`` the linear one when the
-    calibration measured linear frames (a raw DAVIS frame), the S-curve when it could not
-    measure the response, else the MLPs.
+    calibration measured linear frames (a raw DAVIS frame), else the MLPs.
 
     A linear response whose measured levels cannot hold the anchor falls back to the learned
     one, with a warning: a calibration verdict never stops a fit.
@@ -85,7 +84,7 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
             f"{config.sensor.anchor_value}: the response is learned instead",
             stacklevel=2,
         )
-    return RgbCrf(**anchor) if data.response_measured else MonotoneCrf(**anchor)
+    return RgbCrf(**anchor)
 
 
 def build_model(

@@ -61,7 +61,7 @@ def test_the_event_weight_is_the_presets_unless_one_is_stated(preset, stated, us
         FitConfig.of(event_weight=-0.1)
 
 
-def test_the_response_is_linear_for_linear_frames_monotone_where_unmeasured_else_learned():
+def test_frames_measured_linear_get_the_linear_response_unless_another_is_asked():
     from seenerf.sensors.rgb_crf import LinearCrf, MonotoneCrf, PowerCrf, RgbCrf
 
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
@@ -75,9 +75,6 @@ def test_the_response_is_linear_for_linear_frames_monotone_where_unmeasured_else
     assert isinstance(make_method(scene, _config(response="monotone")).model.crf, MonotoneCrf)
     scene.linear_levels = None
     assert isinstance(make_method(scene, _config()).model.crf, RgbCrf)
-    scene.response_measured = False  # frames never linked by events
-    assert isinstance(make_method(scene, _config()).model.crf, MonotoneCrf)
-    assert isinstance(make_method(scene, _config(response="learned")).model.crf, RgbCrf)
 
 
 @pytest.mark.parametrize(
