@@ -503,9 +503,8 @@ def calibrate_frames(
         dead_time_us=dead_time,
         noise_gain=noise.gain if noise else 0.0,
         noise_floor=noise.floor if noise else 0.0,
-        # A curve fitted beside unmeasured thresholds is not stored: the latent frames of the
-        # poses would read it as the sensor's.
-        **({} if "thresholds" in notes else _response_curve(found)),
+        response_value=found.response.knots,
+        response_log_exposure=found.response.log_exposure,
         pixel_factor_on=factor_on.reshape(height, width).astype(np.float32),
         pixel_factor_off=factor_off.reshape(height, width).astype(np.float32),
         residual_events=float(np.sqrt(np.mean(found.residual**2)) / (0.5 * theta.sum())),
@@ -514,14 +513,6 @@ def calibrate_frames(
         method=_METHOD + (f"; frame noise: {_NOISE_METHOD}" if noise else ""),
         assumed=dict(notes.reasons),
     )
-
-
-def _response_curve(found: _Consistency) -> dict[str, np.ndarray]:
-    """The measured inverse response, as :class:`SensorCalibration`'s fields."""
-    return {
-        "response_value": found.response.knots,
-        "response_log_exposure": found.response.log_exposure,
-    }
 
 
 _METHOD = (
