@@ -346,12 +346,15 @@ def _latent_sensors(calibration, threshold):
 
     The calibration (with the given threshold, if any), and beside a calibration measured in
     part the nominal sensor, so that poses never pay for a doubtful value (the better
-    reconstruction is kept). A calibration that measured nothing EDI uses is the nominal sensor
-    already.
+    reconstruction is kept). A calibration with assumed thresholds and no response curve is
+    the nominal sensor already; one that holds a curve fitted beside them is not.
     """
     if threshold is not None:
         return [("given", calibration.with_threshold(threshold))]
-    if not calibration.assumed or calibration.source in ("default", "assumed"):
+    nominal_already = calibration.source in ("default", "assumed") and not len(
+        calibration.response_value
+    )
+    if not calibration.assumed or nominal_already:
         return [(calibration.source, calibration)]
     nominal = default_calibration(
         DEFAULT_THRESHOLD,

@@ -1,3 +1,4 @@
+import dataclasses
 import json
 
 import numpy as np
@@ -131,6 +132,13 @@ def test_latent_frames_are_made_with_the_nominal_sensor_beside_a_doubtful_calibr
     assert [(label, c.threshold) for label, c in given] == [("given", 0.2)]
     nothing = default_calibration(0.25, "no frames")
     assert [label for label, _ in _latent_sensors(nothing, None)] == ["default"]
+    # Thresholds assumed, but a response curve fitted beside them: the nominal sensor too.
+    curve = dict(response_value=np.array([0.1, 0.9]), response_log_exposure=np.array([-2.0, 0.0]))
+    fitted = SensorCalibration(0.3, 0.3, source="assumed", assumed={"thresholds": "bound"}, **curve)
+    assert [label for label, _ in _latent_sensors(fitted, None)] == ["assumed", "nominal"]
+    empty = dict(response_value=np.zeros(0), response_log_exposure=np.zeros(0))
+    plain = dataclasses.replace(fitted, **empty)
+    assert [label for label, _ in _latent_sensors(plain, None)] == ["assumed"]
 
 
 def test_poses_keep_the_better_of_the_measured_and_the_nominal_latent_frames(
