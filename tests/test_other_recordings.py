@@ -64,9 +64,15 @@ def test_the_preparation_says_each_step_and_how_long_it_took(view_by_view):
     _, lines = view_by_view
     assert any(line.startswith("sensor measured in ") for line in lines)
     assert any(line.startswith("poses estimated in ") for line in lines)
-    assert "poses: latent frames" in lines and "poses: features" in lines
-    counted = [line for line in lines if line.startswith("poses: latent frames ")]
-    assert counted[-1].startswith("poses: latent frames 8/8 in ") and len(counted) == 4
+    # The thresholds are assumed but a response curve was fitted beside them: the latent
+    # frames are made with the calibration's values and with the nominal ones, each named.
+    for sensor in ("assumed", "nominal"):
+        assert f"poses: latent frames ({sensor} sensor)" in lines
+        assert f"poses: features ({sensor} sensor)" in lines
+        stage = f"poses: latent frames ({sensor} sensor) "
+        counted = [line for line in lines if line.startswith(stage)]
+        assert counted[-1].startswith(f"{stage}8/8 in ")
+        assert len(counted) == 4
 
 
 def test_what_could_not_be_measured_is_assumed_and_said(view_by_view):
