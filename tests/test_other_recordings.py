@@ -95,7 +95,7 @@ def test_the_default_fit_completes_and_renders(view_by_view):
     folder, _ = view_by_view
     result = fit_session(folder, FitConfig.of(steps=3, warm_steps=10), log=lambda line: None)
     assert (result.run_dir / "renders" / "hdr").is_dir()
-    # Frames never linked by events leave the response unmeasured: the MLPs learn it.
+    # The response was not measured: the fit learns it with the MLPs.
     settings = json.loads((result.run_dir / "config.json").read_text())
     assert settings["rgb_response"] == "RgbCrf"
     assert result.summary.steps == 3 and result.summary.skipped_steps == 0

@@ -16,6 +16,7 @@ __all__ = [
     "PowerCrf",
     "RgbCrf",
     "TabulatedCrf",
+    "anchor_error",
     "apply_power_crf",
     "apply_rgb_crf",
     "interpolate_response",
@@ -145,9 +146,8 @@ class RgbCrf(nn.Module):
         )
 
     def anchor_loss(self) -> torch.Tensor:
-        """Squared error of CRF(anchor) against the anchor value, mean over the three channels."""
-        point = self.weight_in.new_full((3,), self.anchor_log_exposure)
-        return (self(point) - self.anchor_value).square().mean()
+        """See :func:`anchor_error`."""
+        return anchor_error(self, self.weight_in)
 
     def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
         """Fit ``clip(softplus(x), 0, 1)`` on x ~ U[-3, 3] with its own Adam; return last loss."""
@@ -187,9 +187,8 @@ class MonotoneCrf(nn.Module):
         )
 
     def anchor_loss(self) -> torch.Tensor:
-        """Squared error of CRF(anchor) against the anchor value, mean over the three channels."""
-        point = self.offset.new_full((3,), self.anchor_log_exposure)
-        return (self(point) - self.anchor_value).square().mean()
+        """See :func:`anchor_error`."""
+        return anchor_error(self, self.offset)
 
     def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
         """It starts as a sigmoid already; nothing to warm up."""
@@ -294,6 +293,15 @@ class TabulatedCrf(nn.Module):
     def warm_start(self, steps: int = 500, lr: float = 5e-4, seed: int = 0) -> float:
         """Nothing to warm up."""
         return 0.0
+
+
+def anchor_error(crf: nn.Module, like: torch.Tensor) -> torch.Tensor:
+    """A learned response's squared error at its anchor, mean over the three channels.
+
+    ``like``: one of its parameters, whose device and precision the anchor point takes.
+    """
+    point = like.new_full((3,), crf.anchor_log_exposure)
+    return (crf(point) - crf.anchor_value).square().mean()
 
 
 def warm_start_module(module: nn.Module, steps: int, lr: float, seed: int, channels: int) -> float:
