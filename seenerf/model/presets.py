@@ -4,11 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-import numpy as np
-
 from seenerf.render.sampler_spec import SamplerSpec
 
-__all__ = ["DEFAULT_PRESET", "PRESETS", "Preset", "size_field", "with_stated"]
+__all__ = ["DEFAULT_PRESET", "PRESETS", "Preset"]
 
 
 @dataclass(frozen=True)
@@ -19,7 +17,7 @@ class Preset:
         description: one line for ``--help``.
         field: key of :data:`seenerf.fields.FIELDS`.
         field_args: keyword arguments of the field (``resolution`` may be resized by
-            :func:`size_field`).
+            :func:`seenerf.train.builder.size_field`).
         sampler: where rays are sampled.
         pixels_per_step: blurry pixels per step; each is rendered from all b+1 poses.
         steps: default step count (a time budget may stop earlier).
@@ -112,24 +110,3 @@ PRESETS: dict[str, Preset] = {
 
 DEFAULT_PRESET = "fast"
 """The preset of a fit that names none."""
-
-
-def with_stated(preset: Preset, **stated) -> Preset:
-    """The preset with each value a configuration states in place of its own (None: its own)."""
-    return replace(preset, **{name: value for name, value in stated.items() if value is not None})
-
-
-def size_field(preset: Preset, span_px: float) -> Preset:
-    """Set a grid field's resolution from how many sensor pixels the scene box spans.
-
-    A texel finer than a pixel cannot be constrained by the frames, so the resolution is the
-    box's pixel span, at least 48 and at most ``max_resolution``.
-
-    Args:
-        preset: a preset whose field has a ``resolution`` argument (others are returned as is).
-        span_px: sensor pixels across one side of the box (at the median depth for a world box).
-    """
-    if "resolution" not in preset.field_args or preset.max_resolution <= 0:
-        return preset
-    resolution = int(np.clip(span_px, 48, preset.max_resolution))
-    return replace(preset, field_args={**preset.field_args, "resolution": resolution})

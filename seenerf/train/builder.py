@@ -14,7 +14,7 @@ from seenerf.errors import ConfigError
 from seenerf.model.config import FitConfig
 from seenerf.model.model import SeeNerfModel
 from seenerf.model.pose_correction import PoseCorrection
-from seenerf.model.presets import PRESETS, Preset, size_field, with_stated
+from seenerf.model.presets import PRESETS, Preset
 from seenerf.model.variants import LOW_PASS_READINGS, VARIANTS
 from seenerf.render.frustum import forward_facing_space, frustum_box
 from seenerf.render.rays import in_any_view, scene_box_from_cameras
@@ -25,6 +25,7 @@ __all__ = [
     "build_model",
     "resolve_device",
     "rgb_response",
+    "size_field",
     "with_refined_poses",
 ]
 
@@ -87,6 +88,22 @@ def rgb_response(crf: type | None, data: TrainingData, config: FitConfig) -> nn.
     return RgbCrf(**anchor)
 
 
+def size_field(preset: Preset, span_px: float) -> Preset:
+    """Set a grid field's resolution from how many sensor pixels the scene box spans.
+
+    A texel finer than a pixel cannot be constrained by the frames, so the resolution is the
+    box's pixel span, at least 48 and at most ``max_resolution``.
+
+    Args:
+        preset: a preset whose field has a ``resolution`` argument (others are returned as is).
+        span_px: sensor pixels across one side of the box (at the median depth for a world box).
+    """
+    if "resolution" not in preset.field_args or preset.max_resolution <= 0:
+        return preset
+    resolution = int(np.clip(span_px, 48, preset.max_resolution))
+    return dataclasses.replace(preset, field_args={**preset.field_args, "resolution": resolution})
+
+
 def build_model(
     data: TrainingData, config: FitConfig, device: str, method: type
 ) -> tuple[SeeNerfModel, Preset]:
@@ -98,7 +115,6 @@ def build_model(
     and whether the poses may be refined.
     """
     variant = VARIANTS[config.model.variant]
-    crf = rgb_response(variant.crf, data, config)
     poses, bounds = method.training_frame(data, config, variant)
     preset = PRESETS[config.model.preset]
     space = (
@@ -115,12 +131,16 @@ def build_model(
         view_bounds = bounds
         median_depth = float(np.sqrt(bounds[0] * bounds[1]))
         span_px = float(data.intrinsics[0]) * box.size / median_depth
-    preset = with_stated(
+    stated = {
+        "pixels_per_step": config.data.batch_pixels,
+        "warm_steps": config.schedule.warm_steps,
+        "event_weight": config.model.event_weight,
+    }
+    preset = dataclasses.replace(
         size_field(preset, span_px),
-        pixels_per_step=config.data.batch_pixels,
-        warm_steps=config.schedule.warm_steps,
-        event_weight=config.model.event_weight,
+        **{name: value for name, value in stated.items() if value is not None},
     )
+    crf = rgb_response(variant.crf, data, config)
     renderer = RadianceRenderer(preset.field, preset.field_args, preset.sampler, box, space)
     if renderer.grid is not None:
 

@@ -7,8 +7,9 @@ import torch
 from seenerf.data.synthetic import plane_scene
 from seenerf.errors import CheckpointError, ConfigError
 from seenerf.model.config import FitConfig
-from seenerf.model.presets import PRESETS, size_field
+from seenerf.model.presets import PRESETS
 from seenerf.model.variants import VARIANTS
+from seenerf.train.builder import size_field
 from seenerf.train.losses import NOISE_REFERENCE, event_loss, noise_even
 from seenerf.train.methods import frame_scale, make_method
 from seenerf.train.trainer import Trainer
