@@ -247,20 +247,20 @@ GLOBAL_ADJUSTMENT_GROWTH = 1.25
 3-D points that add to the images' coverage only. The global adjustments over hundreds of latent
 frames are what made a long recording's mapping grow faster than its frames. Keyframes then
 every latent frame, one thread, errors against the truth after a similarity alignment (rotation
-median / max, centres median / max of the scene's extent), against COLMAP's 1.1 over every
-point:
+median / max, centres median / max of the scene's extent), with COLMAP's 1.1 and every point:
 
-* room, 100 views at b = 4 (500 latent frames), pinhole: 535 s instead of 1,136 s; 0.183 /
-  0.467 degrees instead of 0.170 / 0.449; centres 0.44 % / 1.39 % either way;
-* room, 40 views, pinhole: 86 s instead of 102 s; 0.139 / 0.329 degrees instead of 0.145 /
-  0.359; centres 0.64 % / 1.9 % instead of 0.63 % / 2.1 %;
+* room, 100 views at b = 4 (500 latent frames): 535 s instead of 1,136 s; 0.183 / 0.467
+  degrees instead of 0.170 / 0.449; centres 0.44 % / 1.39 % either way;
+* room, 40 views: 86 s instead of 102 s; 0.139 / 0.329 degrees instead of 0.145 / 0.359;
+  centres 0.64 % / 1.9 % instead of 0.63 % / 2.1 %;
 * 16 views (80 latent frames), the mapping alone: room 17 s instead of 24-28 s, lamp 19
   instead of 23-26, two random sensors recorded view by view (50 ms exposures every 200 ms,
-  events only around them; room-s101 and an RGGB one) 8 instead of 15 and 22 instead of 26.
-  Rotation 0.085 / 0.206 degrees instead of 0.079 / 0.193, 0.089 / 0.305 instead of 0.091 /
-  0.302, 0.208 / 0.602 instead of 0.211 / 0.594 and 0.087 / 0.227 instead of 0.094 / 0.215:
-  within what other random draws of the matches' verification alone move them (room 0.079 to
-  0.085 degrees, lamp 0.091 to 0.081).
+  events only around them; room-s101 and an RGGB one) 8 instead of 15 and 22 instead of 26;
+  rotation 0.085 / 0.206
+  degrees instead of 0.079 / 0.193, 0.089 / 0.305 instead of 0.091 / 0.302, 0.208 / 0.602
+  instead of 0.211 / 0.594 and 0.087 / 0.227 instead of 0.094 / 0.215: within what other
+  random draws of the matches' verification alone move them (0.079 to 0.085 degrees on room,
+  0.091 to 0.081 on lamp).
 
 Leaving out the redundant points alone gave 855 s on the 100 views (0.176 / 0.449 degrees)."""
 
