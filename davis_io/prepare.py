@@ -35,10 +35,7 @@ POSES_S_PER_IMAGE_SQUARED = 0.0015
 """Mapping's seconds per latent frame squared: every global adjustment covers the whole model so
 far. With :data:`POSES_S_PER_IMAGE`, the rest of the pose stage measured 45-51 s for 80 latent
 frames (16 frames at b = 4), 140 s for 200 (40 frames) and 607 s for 500 (100 frames); the two
-terms give 46, 150 and 600 s. A single rate of 0.65 s gave 52, 130 and 325 s. Since 80 latent
-frames are mapped with fewer global adjustments too
-(:data:`~davis_io.poses.colmap.GLOBAL_ADJUSTMENT_GROWTH`), they measure about 37 s: the plan
-errs long there by some 9 s, which the fit gives back to training once the poses are done."""
+terms give 46, 150 and 600 s. A single rate of 0.65 s gave 52, 130 and 325 s."""
 
 
 def prepare_session(

@@ -159,7 +159,8 @@ def _every_pair(images: int) -> bool:
 def is_long(names: Sequence[Sequence[str]]) -> bool:
     """Whether these views' latent frames are too many to match every pair of them.
 
-    A long recording matches only nearby views (:func:`image_pairs`).
+    A long recording matches only nearby views (:func:`image_pairs`) and maps with fewer global
+    adjustments (:attr:`~davis_io.poses.colmap.MapperSettings.long_recording`).
     """
     return not _every_pair(sum(len(view) for view in names))
 
@@ -206,7 +207,7 @@ def _map(
     model_dir = work_dir / "sparse" / (folder or strategy.name)
 
     def settings(mapped: Sequence[str]) -> MapperSettings:
-        return MapperSettings(strategy.relaxed_initialisation, tuple(mapped))
+        return MapperSettings(strategy.relaxed_initialisation, tuple(mapped), is_long(names))
 
     if strategy.order is not Order.KEYFRAMES_FIRST:  # its images are the ones to map
         return reconstruct(

@@ -13,6 +13,7 @@ from davis_io.geometry import align_poses, rotation_error_deg
 from davis_io.lens import Lens
 from davis_io.poses import recovery
 from davis_io.poses.colmap import (
+    LONG_RECORDING_GROWTH,
     ColmapError,
     Matcher,
     SparseModel,
@@ -175,9 +176,7 @@ def test_a_long_recording_matches_keyframes_with_each_other_and_latent_frames_wi
         assert recovery.matched_pair_count(views, per_view) == len(pairs)
 
 
-def test_keyframes_then_every_latent_frame_are_mapped_with_fewer_global_adjustments(
-    tmp_path, monkeypatch
-):
+def test_a_long_recording_is_mapped_with_fewer_global_adjustments(tmp_path, monkeypatch):
     mapped = []
     monkeypatch.setattr(recovery, "reconstruct", lambda *args, **_kw: mapped.append(args[3]))
     names = [[f"{view}_{latent}.png" for latent in range(3)] for view in range(4)]
@@ -186,15 +185,16 @@ def test_keyframes_then_every_latent_frame_are_mapped_with_fewer_global_adjustme
     assert keyframes_first.order is recovery.Order.KEYFRAMES_FIRST
     every = [name for view in names for name in view]
     recovery._map(keyframes_first, every, tmp_path, tmp_path, names, sharpness, {})
+    monkeypatch.setattr(recovery, "EVERY_PAIR_LIMIT", 65)  # 12 images: 66 pairs
+    recovery._map(keyframes_first, every, tmp_path, tmp_path, names, sharpness, {})
     keyframes = tuple(view[1] for view in names)
-    assert [settings.image_names for settings in mapped] == [keyframes, tuple(every)]
-    for settings in mapped:
-        options = _pipeline_options(settings, fixed_intrinsics=False)
-        assert options.image_names == list(settings.image_names)
-        # Adjusted as a whole at each growth of a quarter, not COLMAP's tenth.
-        assert options.ba_global_frames_ratio == options.ba_global_points_ratio == 1.25
-        assert options.mapper.ba_global_ignore_redundant_points3D
-    assert pycolmap.IncrementalPipelineOptions().ba_global_frames_ratio == pytest.approx(1.1)
+    assert [settings.image_names for settings in mapped] == [keyframes, tuple(every)] * 2
+    assert [settings.long_recording for settings in mapped] == [False, False, True, True]
+    short, long = (_pipeline_options(mapped[i], fixed_intrinsics=False) for i in (1, 3))
+    assert (short.ba_global_frames_ratio, short.ba_global_points_ratio) == (1.1, 1.1)  # COLMAP's
+    assert not short.mapper.ba_global_ignore_redundant_points3D
+    assert long.ba_global_frames_ratio == long.ba_global_points_ratio == LONG_RECORDING_GROWTH
+    assert long.mapper.ba_global_ignore_redundant_points3D and LONG_RECORDING_GROWTH > 1.1
 
 
 def test_only_the_chosen_pairs_are_matched(tmp_path):
