@@ -35,6 +35,7 @@ import numpy as np
 
 from davis_io.calibration.pixel_events import PixelEvents, log_blur
 from davis_io.calibration.response_fit import InverseResponse, hat_basis
+from davis_io.session.defaults import DEFAULT_THRESHOLD
 
 __all__ = [
     "THRESHOLD_RANGE",
@@ -51,14 +52,29 @@ KNOTS = 16
 _SMOOTHNESS = 1e-3
 """Weight of the curve's second differences against the data (per pair)."""
 
-_DAMPING = 1e-3
-"""Levenberg-Marquardt's least damping of the thresholds' steps (relative to the curvature)."""
+_DAMPING = 1e-8
+"""Levenberg-Marquardt's least damping of the thresholds' steps (relative to the curvature's
+diagonal). The disagreement is flat along the thresholds' common scale (:mod:`scale`): on the
+emulated room-s22 the curvature there was a ten-thousandth of the largest, so 1e-3 of the
+diagonal outweighed it, and each step went only 0.86 of the last's way along the scale (the
+fits took 9 to 30 steps, 148 in all, and stopped short of their least); at 1e-8 they took 2 to
+9 (29 in all)."""
 
 _MAX_DAMPING = 1e6
 """Damping at which the threshold fit gives up looking for a step that lowers the disagreement."""
 
 _MAX_STEPS = 30
 """Steps of the threshold fit at most."""
+
+_SCALE_PULL = 1e-4
+"""Weight of the thresholds' common scale's pull towards the nominal, in events² per unit of
+ln(scale)², added to the disagreement the threshold fit minimises. Where frames are too sharp
+to pin the scale (:mod:`scale`) the disagreement is flat along it and the fit ran to a bound of
+:data:`THRESHOLD_RANGE` (a 1 ms exposure of the emulated room: 2.0, then 0.01, where the
+pixels' factors came out flat and were dropped); the pull holds it near the nominal. Where the
+blur pins the scale, the disagreement rises by a few per cent of about 1 event² within a
+factor of √2, a thousand times the pull's 1e-5: it moves the scale by about a thousandth of
+its distance from the nominal."""
 
 _FACTOR_PRIOR = 4.0
 """Shrinkage of a pixel's factors towards 1, in squared events (about 4 pairs' worth)."""
@@ -68,6 +84,9 @@ THRESHOLD_RANGE = (0.01, 2.0)
 threshold is a few tenths; without a ceiling a recording whose frames are too sharp to pin the
 scale let the search climb to 300 (a 1/16 exposure of the emulated room), where the blur
 term's exponentials overflowed and every value after was NaN."""
+
+_INSIDE = 1.01
+"""How far inside :data:`THRESHOLD_RANGE` a start outside it is moved, as a factor."""
 
 _FACTOR_RANGE = (0.05, 3.0)
 """Bounds of a pixel's factor. Spread is absolute, not relative: an OFF threshold of 0.19 drawn
@@ -203,13 +222,18 @@ def fit_thresholds(
 
     Levenberg-Marquardt on the residuals in events (:meth:`ConsistencyProblem.linearised`);
     a step is taken only where it lowers the disagreement. Nelder-Mead needed about 45
-    evaluations per fit, this about 4 steps.
+    evaluations per fit, this 2 to 9 steps. The thresholds' common scale is pulled weakly
+    towards the nominal (:data:`_SCALE_PULL`).
+
+    A start outside :data:`THRESHOLD_RANGE` (thresholds scaled by their pixels' median
+    factors) is moved inside it.
 
     Returns:
-        The thresholds ``(2,)`` and the disagreement there (events squared).
+        The thresholds ``(2,)`` and the disagreement there (events squared, without the pull).
     """
-    theta = np.asarray(start, np.float64).copy()
-    best = problem.disagreement(*theta)
+    low, high = THRESHOLD_RANGE
+    theta = np.clip(np.asarray(start, np.float64), low * _INSIDE, high / _INSIDE)
+    best = _pulled_disagreement(problem, theta)
     damping = _DAMPING
     for _step in range(_MAX_STEPS):
         system = _normal_equations(problem, theta)
@@ -217,7 +241,7 @@ def fit_thresholds(
             break
         while damping < _MAX_DAMPING:
             step = _damped_step(*system, damping)
-            value = problem.disagreement(*(theta + step))
+            value = _pulled_disagreement(problem, theta + step)
             if value < best:
                 break
             damping *= 10
@@ -227,7 +251,20 @@ def fit_thresholds(
         damping = max(damping / 10, _DAMPING)
         if np.max(np.abs(step)) < tolerance / 4:
             break
-    return theta, best
+    return theta, best - _scale_pull(theta)[0] ** 2
+
+
+def _scale_pull(theta: np.ndarray) -> tuple[float, np.ndarray]:
+    """The pull's residual ``sqrt(w) ln(sqrt(ON OFF) / nominal)`` and its slopes ``(2,)``."""
+    weight = np.sqrt(_SCALE_PULL)
+    residual = weight * (0.5 * float(np.log(theta[0] * theta[1])) - np.log(DEFAULT_THRESHOLD))
+    return residual, weight * 0.5 / theta
+
+
+def _pulled_disagreement(problem: ConsistencyProblem, theta: np.ndarray) -> float:
+    """The disagreement plus the scale pull's square (infinite where the disagreement is)."""
+    value = problem.disagreement(*theta)
+    return value + _scale_pull(theta)[0] ** 2 if np.isfinite(value) else value
 
 
 def _normal_equations(
@@ -235,7 +272,8 @@ def _normal_equations(
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """Gauss-Newton's normal matrix and gradient of the residuals over the mean threshold.
 
-    None where they are not finite (a blur term that overflows).
+    Per pair, with the scale pull's residual added. None where they are not finite (a blur
+    term that overflows).
     """
     with np.errstate(over="ignore", invalid="ignore"):
         residual, jacobian = problem.linearised(*theta)
@@ -243,7 +281,11 @@ def _normal_equations(
         # d(r / mean) / d theta, the mean rising by half of each threshold.
         scaled = residual / mean
         jacobian = jacobian / mean - 0.5 * scaled[:, None] / mean
-        normal, gradient = jacobian.T @ jacobian, jacobian.T @ scaled
+        normal = jacobian.T @ jacobian / len(scaled)
+        gradient = jacobian.T @ scaled / len(scaled)
+    pull, slopes = _scale_pull(theta)
+    normal += np.outer(slopes, slopes)
+    gradient += pull * slopes
     if not (np.all(np.isfinite(normal)) and np.all(np.isfinite(gradient))):
         return None
     return normal, gradient

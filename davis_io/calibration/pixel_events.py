@@ -119,21 +119,21 @@ def event_path(
     time = np.asarray(times_us, np.int64)[order].astype(np.float64)
     pixel = np.asarray(pixel_index, np.int64)[order]
     on = np.asarray(is_on, bool)[order]
-    climbed_on = np.cumsum(on).astype(np.float64)
-    climbed_off = np.cumsum(~on).astype(np.float64)
-    first = np.ones(len(pixel), bool)
-    first[1:] = pixel[1:] != pixel[:-1]
-    turn = np.zeros(len(pixel), bool)  # the next event is the same pixel's, of the other sign
-    turn[:-1] = ~first[1:] & (on[1:] != on[:-1])
+    climbed_on = np.cumsum(on, dtype=np.float64)
+    climbed_off = np.arange(1.0, len(on) + 1) - climbed_on
+    starts = np.ones(len(pixel), bool)
+    starts[1:] = pixel[1:] != pixel[:-1]
+    turns = np.zeros(len(pixel), bool)  # the next event is the same pixel's, of the other sign
+    turns[:-1] = ~starts[1:] & (on[1:] != on[:-1])
     # Each event's knot, after the level before a pixel's first event (a microsecond earlier,
     # so that step stays sharp) and before the half-level turn to an opposite neighbour.
-    slots = 1 + first + turn
-    at = np.cumsum(slots) - slots + first
+    slots = 1 + starts + turns
+    at = np.cumsum(slots) - slots + starts
     size = int(slots.sum())
+    first, turn = np.flatnonzero(starts), np.flatnonzero(turns)  # few: gathered by index
     knots = [np.empty(size), np.empty(size), np.empty(size)]
     knot_pixel = np.empty(size, np.int64)
-    lead, mid = at[first] - 1, at[turn] + 1
-    following = np.flatnonzero(turn) + 1
+    lead, mid, following = at[first] - 1, at[turn] + 1, turn + 1
     for column, event, before, middle in zip(
         knots,
         (time, climbed_on, climbed_off),

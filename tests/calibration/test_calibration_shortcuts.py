@@ -8,7 +8,7 @@ from synthetic_recording import KnownSensor, synthetic_recording
 
 from davis_io.calibration import dead_time as dead_time_module
 from davis_io.calibration import estimate
-from davis_io.calibration.consistency import KNOTS, fit_pixel_factors
+from davis_io.calibration.consistency import KNOTS, THRESHOLD_RANGE, fit_pixel_factors
 from davis_io.calibration.response_fit import frame_levels, place_knots
 from davis_io.cores import cores_limited
 from davis_io.emulator import Response
@@ -51,7 +51,7 @@ def test_every_pixels_factors_fitted_block_by_block_equal_one_fit_of_all(
         on, off = estimate._sensor_factors(recording, subset, problem, theta)
     assert workers == [cores]  # a fit told to use one core keeps to it
     every = _problems(recording, np.arange(height * width)).at(2000)
-    fit_pixel_factors(every, theta, problem.solve(*theta)[1])
+    fit_pixel_factors(every, theta, problem.solve(*theta)[1], estimate.SENSOR_FACTOR_STEPS)
     np.testing.assert_allclose(on, every.factor_on, rtol=1e-9)
     np.testing.assert_allclose(off, every.factor_off, rtol=1e-9)
     assert np.std(on) > 0.02 and np.std(off) > 0.02  # the pixels' own thresholds were learned
@@ -124,3 +124,34 @@ def test_the_threshold_fit_ends_where_the_disagreement_is_least(recording):
     for shift in ([0.004, 0], [-0.004, 0], [0, 0.004], [0, -0.004]):
         assert problem.disagreement(*(theta + shift)) > best
     assert best == pytest.approx(problem.disagreement(*theta))
+
+
+def test_the_threshold_fit_reaches_its_least_in_few_steps(monkeypatch):
+    # A 20 ms exposure blurs a little: the disagreement is nearly flat along the common scale.
+    # A damping of the steps that outweighed the curvature there left the fit creeping along
+    # it, a fraction of the way per step: 20 to 25 steps to this tolerance.
+    blurred, _, _ = synthetic_recording(
+        KnownSensor(0.25, 0.35, 0.04, Response("reinhard_gamma", gain=1.3, gamma=2.4)),
+        exposure_us=20_000,
+    )
+    problem = _problems(blurred, np.arange(0, 3072, 2)).at(0)
+    linearised, steps = problem.linearised, []
+    monkeypatch.setattr(
+        problem, "linearised", lambda *theta: steps.append(theta) or linearised(*theta)
+    )
+    theta, _ = estimate.fit_thresholds(problem, (0.2, 0.2), tolerance=1e-4)
+    assert len(steps) <= 10
+    np.testing.assert_allclose(theta, [0.22, 0.32], atol=0.005)  # true medians 0.25, 0.35
+
+
+def test_a_scale_the_frames_leave_free_stays_near_the_nominal():
+    # Frames of a 4 ms exposure barely blur: the disagreement is flat along the common scale,
+    # and the fit, started far above, ran to a bound of its range.
+    sharp, _, _ = synthetic_recording(
+        KnownSensor(0.25, 0.35, 0.02, Response("reinhard_gamma")), exposure_us=4_000
+    )
+    problem = _problems(sharp, np.arange(0, 3072, 2)).at(0)
+    theta, _ = estimate.fit_thresholds(problem, (1.5, 1.9))
+    low, high = THRESHOLD_RANGE
+    assert 0.15 < np.sqrt(theta.prod()) < 0.6
+    assert theta.min() > 2 * low and theta.max() < high / 2
