@@ -22,12 +22,12 @@ __all__ = [
     "prepare_session",
 ]
 
-CALIBRATION_S_PER_MILLION_EVENTS = 0.9
+CALIBRATION_S_PER_MILLION_EVENTS = 0.8
 """The calibration's seconds per million events on 2 cores (``seecap calibrate``, the whole
-process): 15.3 s for 16.9 M events (an emulated room) and 21.0 s for 24.2 M (a bright lamp)."""
+process): 15.3 s for 18.5 M events (an emulated room) and 17.6 s for 24.7 M (a bright lamp)."""
 POSES_S_PER_PAIR = 0.012
-"""Matching's seconds per pair of latent frames, on one thread: 24-39 s for the 3,160 pairs of
-80 latent frames."""
+"""Matching's seconds per pair of latent frames, on one thread: 24-39 s for 3,160 pairs (every
+pair of 80 latent frames)."""
 POSES_S_PER_IMAGE = 0.45
 """Seconds per latent frame of the rest of the pose stage (EDI, features, the lens, and mapping's
 part that grows with the frames alone)."""

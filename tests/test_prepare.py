@@ -25,14 +25,16 @@ def test_stage_lines_say_each_stage_and_each_quarter_with_the_time_left():
 
 
 def test_the_preparation_is_estimated_from_the_events_and_latent_frames():
-    # 24 M events at 0.9 s a million; 80 latent frames: 3,160 pairs at 0.012 s, 0.45 s each and
-    # 0.0015 s for each of the 6,400 squared.
+    # 24 M events at 0.8 s a million; 80 latent frames: the neighbouring views' 976 pairs (120
+    # keyframe pairs, 160 within views, 375 one view apart and 350 two apart, less the 29
+    # keyframe pairs counted twice) at 0.012 s, 0.45 s each and 0.0015 s for each of the 6,400
+    # squared.
     estimate = preparation_seconds(24_000_000, 16, 5, calibrated=False, posed=False)
-    assert estimate.calibration_s == pytest.approx(21.6)
-    assert estimate.poses_s == pytest.approx(37.92 + 36.0 + 9.6)
-    assert estimate.total_s == pytest.approx(105.12)
+    assert estimate.calibration_s == pytest.approx(19.2)
+    assert estimate.poses_s == pytest.approx(11.712 + 36.0 + 9.6)
+    assert estimate.total_s == pytest.approx(76.512)
     assert estimate.summary() == (
-        "about 22 s to measure the sensor (24.0 M events) and 84 s for poses (80 latent frames)"
+        "about 19 s to measure the sensor (24.0 M events) and 57 s for poses (80 latent frames)"
     )
 
 
@@ -48,7 +50,7 @@ def test_a_long_recordings_poses_are_estimated_from_the_pairs_it_matches():
 def test_what_a_session_holds_already_takes_no_time():
     posed = preparation_seconds(24_000_000, 16, 5, calibrated=False, posed=True)
     assert (
-        posed.poses_s == 0 and posed.summary() == "about 22 s to measure the sensor (24.0 M events)"
+        posed.poses_s == 0 and posed.summary() == "about 19 s to measure the sensor (24.0 M events)"
     )
     both = preparation_seconds(24_000_000, 16, 5, calibrated=True, posed=True)
     assert both.total_s == 0 and both.summary() == "the sensor and poses are stored"

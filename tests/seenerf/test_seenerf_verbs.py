@@ -151,8 +151,8 @@ def test_a_fit_with_a_budget_says_what_its_preparation_should_take_first(monkeyp
     with pytest.raises(Stop):
         prepare_and_fit(tmp_path, FitConfig.of(time_budget_s=600.0, threads=1), log=shown.append)
     assert shown[1] == (
-        "budget 600 s: about 22 s to measure the sensor (24.0 M events) and 84 s for poses "
-        "(80 latent frames), then training and the final renders in the 495 s left"
+        "budget 600 s: about 19 s to measure the sensor (24.0 M events) and 57 s for poses "
+        "(80 latent frames), then training and the final renders in the 523 s left"
     )
     shown.clear()
     with pytest.raises(Stop):
