@@ -66,30 +66,34 @@ MINIMUM_FRACTION = 0.5
 """Below this share of its images (or under 3 images) even the best model is not usable."""
 
 EVERY_PAIR_LIMIT = 2000
-"""Every pair of latent frames is matched up to this many pairs (63 latent frames: 12 views at
-b = 4), the neighbouring views' (:func:`image_pairs`) beyond, mapped with fewer global
+"""Every pair of latent frames is matched up to this many pairs (63 latent frames: 12 views
+at b = 4), the neighbouring views' (:func:`image_pairs`) beyond, mapped with fewer global
 adjustments (:data:`~davis_io.poses.colmap.LONG_RECORDING_GROWTH`). Every pair costs
 0.012-0.015 s on one thread, their count grows with the square of the views.
 
-Measured at 16 views, b = 4 (80 latent frames, 3,160 pairs of which the neighbouring views'
-are 976), every pair against the neighbours', whole pose step, rotation error median / max
-against the truth (degrees), then fits of 1,500 steps on one thread from each (HDR / novel
-exposure PSNR, dB):
+Measured at 16 views, b = 4 (80 latent frames, 3,160 pairs of which the neighbouring views' are
+976), every pair against the neighbours', whole pose step, rotation error median / max against
+the truth (degrees), then fits of 1,500 steps on one thread from each (HDR / novel exposure
+PSNR, dB):
 
 * room: 86 s against 59 s; the fits 30.28 and 30.24 (two sets of the verification's random
-  draws) against 30.24 HDR. An earlier measurement on four scenes had put the neighbours' fit
-  of room 0.3 dB under and their rotation medians 0.005-0.024 over;
+  draws) against 30.24 HDR. An earlier measurement on four scenes had put the neighbours' fit of
+  room 0.3 dB under and their rotation medians 0.005-0.024 over;
 * five of the blind benchmark's sessions: 76-126 s against 33-59 s. Rotation medians rose on
   four of the five (+0.003 to +0.019; corridor-s16 -0.006); other random draws of the
-  verification moved room's and lamp's by 0.006 and 0.010. The fits: room-s10 29.84 / 27.57 against
-  29.82 / 27.66, room-s22 31.25 / 29.78 against 30.81 / 29.44, lamp-s5 32.28 / 24.49 against
-  32.19 / 24.49, lamp-s9 31.69 / 26.39 against 31.46 / 26.24, corridor-s16 26.80 / 25.04
+  verification moved room's and lamp's by 0.006 and 0.010. The fits: room-s10 29.84 / 27.57
+  against 29.82 / 27.66, room-s22 31.25 / 29.78 against 30.81 / 29.44, lamp-s5 32.28 / 24.49
+  against 32.19 / 24.49, lamp-s9 31.69 / 26.39 against 31.46 / 26.24, corridor-s16 26.80 / 25.04
   against 27.65 / 25.46: on average +0.01 dB HDR and 0.00 novel, for half the time.
 
-Matched to four views on either side instead of two, room-s22's rotation median was 0.147
-(0.136 at two, 0.120 from every pair): more pairs did not win it back. At 40 views (room)
-the neighbouring views' 3,028 pairs of 19,900 took 243 s instead of 544 s, 0.114 / 0.279
-degrees instead of 0.088 / 0.255, centres 0.63 % / 2.1 % of the scene's extent either way."""
+On the benchmark's scenes (whole pose step, calibrated before): room 41 s, 0.110 degrees,
+against 109 s, 0.086 from every pair; lamp-film 47 s, 0.118, against 95 s, 0.100. Matched to
+four views on either side instead of two, room-s22's rotation median was 0.147 (0.136 at two,
+0.120 from every pair). Each latent frame matched with every view's keyframe as well (1,704
+pairs) won the accuracy back (room 0.084, lamp-film 0.108) but took 68-75 s, over the minute the
+step is given. At 40 views (room) the neighbouring views' 3,028 pairs of 19,900 took 243 s
+instead of 544 s, 0.114 / 0.279 degrees instead of 0.088 / 0.255, centres 0.63 % / 2.1 % of the
+scene's extent either way."""
 
 NEIGHBOUR_VIEWS = 2
 """A long recording matches each latent frame with those of this many views on either side."""
