@@ -90,12 +90,6 @@ BLOCK_PIXELS = 4096
 to cut into pieces, a block at a time 4 s: each block's arrays stay in the caches and in memory
 already mapped."""
 
-SENSOR_FACTOR_STEPS = 2
-"""Gauss-Newton steps on every sensor pixel's factors (from 1; the subset's take 4). The
-factors' correlation with the true pixels' thresholds (ON/OFF): corridor-s16 0.447/0.874 after
-one step, 0.494/0.886 after two, 0.495/0.886 after three to six; room-s10 0.716/0.588 from two
-on. Each step cost corridor-s16 about 4 s of its 34 s on one core."""
-
 LINEAR_RMS = 0.03
 """A response is linear when the free curve departs from a straight line in ln(v - black) by
 less than this RMS (ln units)."""
@@ -281,13 +275,19 @@ def _fit_with_factors(problem: ConsistencyProblem, theta, rounds: int, progress)
 
 
 def _split_half_spread(subset: _Problems, problem: ConsistencyProblem, theta) -> np.ndarray:
-    """Half the difference of the thresholds two disjoint halves of the pixels give."""
-    halves = []
-    for parity in (0, 1):
+    """Half the difference of the thresholds two disjoint halves of the pixels give.
+
+    The halves are fitted side by side where two cores are usable.
+    """
+
+    def fitted(parity: int) -> np.ndarray:
         factors = tuple(f[parity::2] for f in _factors(problem))
         half = subset.half(parity).at(problem.latency_us, factors)
-        halves.append(fit_thresholds(half, theta, tolerance=1e-4)[0])
-    return 0.5 * np.abs(halves[0] - halves[1])
+        return fit_thresholds(half, theta, tolerance=1e-4)[0]
+
+    with ThreadPoolExecutor(min(2, usable_cores())) as pool:
+        first, second = pool.map(fitted, (0, 1))
+    return 0.5 * np.abs(first - second)
 
 
 def _sensor_factors(
@@ -306,7 +306,7 @@ def _sensor_factors(
         found = _Problems(
             recording, pixels, subset.levels, subset.knots, subset.pair_mask, events
         ).at(problem.latency_us)
-        refine_pixel_factors(found, theta, response, SENSOR_FACTOR_STEPS)
+        refine_pixel_factors(found, theta, response)
         return found.factor_on, found.factor_off, found.usable.sum(axis=0)
 
     with ThreadPoolExecutor(usable_cores()) as pool:

@@ -51,7 +51,7 @@ def test_every_pixels_factors_fitted_block_by_block_equal_one_fit_of_all(
         on, off = estimate._sensor_factors(recording, subset, problem, theta)
     assert workers == [cores]  # a fit told to use one core keeps to it
     every = _problems(recording, np.arange(height * width)).at(2000)
-    fit_pixel_factors(every, theta, problem.solve(*theta)[1], estimate.SENSOR_FACTOR_STEPS)
+    fit_pixel_factors(every, theta, problem.solve(*theta)[1])
     np.testing.assert_allclose(on, every.factor_on, rtol=1e-9)
     np.testing.assert_allclose(off, every.factor_off, rtol=1e-9)
     assert np.std(on) > 0.02 and np.std(off) > 0.02  # the pixels' own thresholds were learned
