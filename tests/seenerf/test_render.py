@@ -104,6 +104,26 @@ def test_vector_matrix_sampling_by_hand():
     assert torch.allclose(features, torch.full((5, 2), 6.0))  # 3 pairs x (1 x 2)
 
 
+@pytest.mark.parametrize("channels", [8, 6])
+def test_vector_matrix_lookups_in_channel_groups_match_one_lookup_per_plane(channels):
+    import torch.nn.functional as F  # noqa: N812
+
+    from seenerf.fields.factorised import _lookup
+
+    generator = torch.Generator().manual_seed(3)
+    features = torch.randn(3, channels, 7, 5, generator=generator, requires_grad=True)
+    uv = torch.rand(3, 11, 2, generator=generator) * 2 - 1
+    weights = torch.randn(3, channels, 11, generator=generator)
+    (_lookup(features, uv) * weights).sum().backward()
+    grouped_gradient = features.grad.clone()
+    features.grad = None
+    plain = F.grid_sample(features, uv[:, None], align_corners=True)[:, :, 0]
+    assert torch.allclose(_lookup(features, uv), plain, atol=1e-6)
+    (plain * weights).sum().backward()
+    assert torch.allclose(grouped_gradient, features.grad, atol=1e-5)
+    assert grouped_gradient.abs().sum() > 0
+
+
 def test_smoothness_by_hand_and_its_written_out_gradient():
     from seenerf.fields.factorised import _SquaredSteps
 
