@@ -277,7 +277,8 @@ def _fit_with_factors(problem: ConsistencyProblem, theta, rounds: int, progress)
 def _split_half_spread(subset: _Problems, problem: ConsistencyProblem, theta) -> np.ndarray:
     """Half the difference of the thresholds two disjoint halves of the pixels give.
 
-    The halves are fitted side by side where two cores are usable.
+    The halves are fitted side by side where two cores are usable (a pool makes no more
+    threads than it is given tasks).
     """
 
     def fitted(parity: int) -> np.ndarray:
@@ -285,7 +286,7 @@ def _split_half_spread(subset: _Problems, problem: ConsistencyProblem, theta) ->
         half = subset.half(parity).at(problem.latency_us, factors)
         return fit_thresholds(half, theta, tolerance=1e-4)[0]
 
-    with ThreadPoolExecutor(min(2, usable_cores())) as pool:
+    with ThreadPoolExecutor(usable_cores()) as pool:
         first, second = pool.map(fitted, (0, 1))
     return 0.5 * np.abs(first - second)
 
