@@ -4,10 +4,10 @@ Examples:
     python tools/bench_fit.py --quick
     python tools/bench_fit.py --scene room --budget 600 --variants full,no-events,base,oracle
 
-The full mode records an emulated session (``seecap record --emulate``) unless ``--session`` is
-given, estimates poses through ``seecap fit`` (or, with ``--true-poses``, stores the truth's poses
-when the pose estimator is unavailable: the report says so), fits each variant with the same time
-budget, and prints HDR and novel-exposure scores beside the training speed.
+The full mode records an emulated session (as ``seecap record --emulate`` does) unless ``--session``
+is given, estimates poses through ``seecap fit`` (or, with ``--true-poses``, stores the truth's
+poses when the pose estimator is unavailable: the report says so), fits each variant with the same
+time budget, and prints HDR and novel-exposure scores beside the training speed.
 """
 
 from __future__ import annotations
@@ -16,16 +16,17 @@ import argparse
 import json
 import os
 import platform
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import torch
 
+from davis_io.capture import CaptureRequest, record_capture
 from davis_io.poses.truth import store_true_poses
 from davis_io.prepare import prepare_session
 from davis_io.session import DEFAULT_BINS
+from davis_io.session.units import parse_duration_us
 from seenerf.data.session import load_training_data
 from seenerf.data.synthetic import plane_scene
 from seenerf.model.config import DEFAULT_VARIANT, FitConfig
@@ -102,25 +103,11 @@ def speed_table(data, steps: int, rounds: int = 3) -> dict:
 
 
 def record(scene: str, out: Path, frames: int, exposure: str) -> float:
+    """Record ``scene`` into ``out`` as ``seecap record --emulate`` does; seconds taken."""
     start = time.perf_counter()
-    subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "davis_io.cli",
-            "record",
-            "--emulate",
-            scene,
-            "--exposure",
-            exposure,
-            "--frames",
-            str(frames),
-            "--out",
-            str(out),
-            "--overwrite",
-        ],
-        check=True,
-        stdout=subprocess.DEVNULL,
+    exposure_us = parse_duration_us(exposure, what="--exposure")
+    record_capture(
+        CaptureRequest(emulate=scene, exposure_us=exposure_us, frames=frames), out, overwrite=True
     )
     return time.perf_counter() - start
 

@@ -3,11 +3,11 @@ or ignored.
 
     python tools/bench_lens.py [--out bench-out/lens] [--budget 10m] [--publish]
 
-Records the scene twice with one seed (``seecap record --emulate``, the second with ``--lens
-random``), then fits four sessions with ``seecap fit --preset fast`` on one thread each, two side
-by side: the undistorted session, and three copies of the distorted one (its DV calibration file
-given, nothing given, its intrinsics given without the distortion). Each row: the lens the poses
-used, their rotation error against the truth, the fit's scores. Writes ``OUT/lens.json`` and
+Records the scene twice with one seed (as ``seecap record --emulate`` does, the second with ``--lens
+random``), then fits four sessions with ``seecap fit --preset fast`` on one thread each, two side by
+side: the undistorted session, and three copies of the distorted one (its DV calibration file given,
+nothing given, its intrinsics given without the distortion). Each row: the lens the poses used,
+their rotation error against the truth, the fit's scores. Writes ``OUT/lens.json`` and
 ``OUT/lens.md``; ``--publish`` copies the JSON to ``bench-results/`` and splices the report into
 BENCHMARKS.md between its lens markers. About 30 minutes on 2 cores at a 10-minute budget.
 """
@@ -26,6 +26,7 @@ from benchlib.machine import scene_header
 from benchlib.publish import keep_report, report_folder, report_parser
 from benchlib.runner import python_command, run_measured
 
+from davis_io.capture import CaptureRequest, record_capture
 from davis_io.emulator import EmulatedCamera
 from davis_io.lens import write_camera_calibration
 from davis_io.poses.truth import compare_with_truth
@@ -43,14 +44,8 @@ def _seecap(*arguments: str) -> list[str]:
 def _record(out: Path, name: str, lens: str) -> Path:
     folder = out / "sessions" / name
     if not (folder / "truth").is_dir():
-        argv = ["record", "--emulate", SCENE, "--seed", str(SEED), "--frames", str(FRAMES)]
-        usage = run_measured(
-            _seecap(*argv, "--lens", lens, "--out", str(folder), "--overwrite"),
-            out / "logs" / f"record-{name}.log",
-            timeout_s=TIMEOUT_S,
-        )
-        if usage.returncode != 0:
-            raise SystemExit(f"recording {name} failed: see {out / 'logs'}")
+        request = CaptureRequest(emulate=SCENE, seed=SEED, frames=FRAMES, lens=lens)
+        record_capture(request, folder, overwrite=True)
     return folder
 
 

@@ -2,14 +2,14 @@
 
     python tools/bench_sharing.py [--out bench-out/sharing] [--steps 200] [--publish]
 
-Records one scene (``seecap record --emulate``), measures its sensor and poses once, then fits
-it three times in turn with ``seecap fit --preset fast --steps N``: alone, and beside a process
-that keeps one core busy, once with the threads the fit chooses and once with one thread per
-core asked for. Each row: the threads the fit used and its steps per second of training. Writes
-``OUT/sharing.json`` and ``OUT/sharing.md``; ``--publish`` copies the JSON to ``bench-results/``
-and splices the report into BENCHMARKS.md between its sharing markers. About 15 minutes on 2
-cores, most of it the fit that asks for every core beside the busy one; the busy process stops
-once a fit has trained (its renders are not measured).
+Records one scene (as ``seecap record --emulate`` does), measures its sensor and poses once, then
+fits it three times in turn with ``seecap fit --preset fast --steps N``: alone, and beside a process
+that keeps one core busy, once with the threads the fit chooses and once with one thread per core
+asked for. Each row: the threads the fit used and its steps per second of training. Writes
+``OUT/sharing.json`` and ``OUT/sharing.md``; ``--publish`` copies the JSON to ``bench-results/`` and
+splices the report into BENCHMARKS.md between its sharing markers. About 15 minutes on 2 cores, most
+of it the fit that asks for every core beside the busy one; the busy process stops once a fit has
+trained (its renders are not measured).
 """
 
 from __future__ import annotations
@@ -29,6 +29,8 @@ from benchlib.publish import keep_report, report_folder, report_parser
 from benchlib.runner import python_command, run_measured
 from benchlib.sharing import SHARING_CASES, sharing_report
 
+from davis_io.capture import CaptureRequest, record_capture
+
 SCENE, SEED, FRAMES = "room", 7, 16
 TIMEOUT_S = 3600.0
 BUSY = "while True: pass"
@@ -42,15 +44,11 @@ def _seecap(*arguments: str) -> list[str]:
 def _prepared(out: Path) -> Path:
     """The recorded session, its sensor measured and poses estimated."""
     folder = out / "sessions" / SCENE
-    steps = [
-        ["record", "--emulate", SCENE, "--seed", str(SEED), "--frames", str(FRAMES)]
-        + ["--out", str(folder), "--overwrite"],
-        ["calibrate", str(folder)],
-        ["poses", str(folder)],
-    ]
     if (folder / "colmap" / "report.json").exists():
-        steps = []
-    for number, argv in enumerate(steps):
+        return folder
+    request = CaptureRequest(emulate=SCENE, seed=SEED, frames=FRAMES)
+    record_capture(request, folder, overwrite=True)
+    for number, argv in enumerate((["calibrate", str(folder)], ["poses", str(folder)])):
         usage = run_measured(_seecap(*argv), out / "logs" / f"prepare-{number}.log")
         if usage.returncode != 0:
             raise SystemExit(f"seecap {argv[0]} failed: see {out / 'logs'}")
