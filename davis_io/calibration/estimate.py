@@ -32,6 +32,7 @@ from davis_io.calibration.plausible import (
     FACTOR_SPREAD,
     LATENCY_US,
     THRESHOLD,
+    THRESHOLD_SCALE,
     Assumptions,
     flat_profile,
 )
@@ -93,6 +94,10 @@ already mapped."""
 LINEAR_RMS = 0.03
 """A response is linear when the free curve departs from a straight line in ln(v - black) by
 less than this RMS (ln units)."""
+
+DARK_END = 0.1
+"""Frame values below this share of full scale are the dark end, where noise bends the free
+curve."""
 
 Progress = Callable[[str], None]
 
@@ -618,6 +623,8 @@ def _reviewed_response(
         f"response {'linear' if is_linear else 'not linear'}: the free curve is a power "
         f"{power:.2f} of v {'-' if black >= 0 else '+'} {abs(black):.3f} to {straightness:.3f} RMS"
     )
+    if is_linear and pile_up is None and black < 0 and _linear_above_dark_end(found, progress):
+        black = 0.0
     if is_linear and pile_up is None and not BLACK_LEVEL.holds(black):
         notes.add(
             "response",
@@ -627,6 +634,27 @@ def _reviewed_response(
         )
         is_linear = False
     return levels.black_level or (black if is_linear else 0.0), levels.saturation, is_linear
+
+
+def _linear_above_dark_end(found: _Consistency, progress) -> bool:
+    """Whether a curve straight only below zero is the line of frames with black at 0.
+
+    Noise in the darkest values flattens the free curve's dark end (their errors attenuate the
+    slope they are regressed on), which the search for the straightest black reads as a level
+    below zero: -0.03 to -0.06 on linear 8-bit frames with black at 0. Above the dark end such a
+    curve is straight with black at 0, and its power is the true thresholds' share of the nominal
+    ones (0.77-0.84 measured against 0.80-0.83), which a DAVIS keeps within
+    :data:`THRESHOLD_SCALE`; a tone curve that only looks straight is not.
+    """
+    _, power, straightness = linear_fit(found.response, 0.0, above=DARK_END)
+    if straightness >= LINEAR_RMS or not THRESHOLD_SCALE.holds(power):
+        return False
+    progress(
+        f"response linear, black at 0: above {DARK_END:g} of full scale the free curve is a "
+        f"power {power:.2f} of v to {straightness:.3f} RMS (the noise of the darkest values "
+        "bends it below)"
+    )
+    return True
 
 
 def _without_consistency(

@@ -20,12 +20,16 @@ __all__ = [
     "FLAT_PROFILE",
     "LATENCY_US",
     "THRESHOLD",
+    "THRESHOLD_SCALE",
     "Assumptions",
     "flat_profile",
 ]
 
 THRESHOLD = Bounds(0.05, 1.0, "ln per event")
 """A DAVIS pixel's contrast threshold: a few tenths at usual biases, 0.05-1 at the extremes."""
+
+THRESHOLD_SCALE = Bounds(0.5, 2.0, "of the nominal threshold")
+"""How far a DAVIS's thresholds lie from the nominal 0.3: 0.15 to 0.6 at usual biases."""
 
 LATENCY_US = Bounds(0, 40_000, "µs", integer=True)
 """How late a DAVIS pixel's events come: well under a millisecond in bright light, a few in the

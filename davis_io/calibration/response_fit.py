@@ -109,7 +109,9 @@ class InverseResponse:
         return hat_basis(np.ravel(values), self.knots) @ self.log_exposure
 
 
-def linear_fit(response: InverseResponse, black: float | None) -> tuple[float, float, float]:
+def linear_fit(
+    response: InverseResponse, black: float | None, above: float = 0.0
+) -> tuple[float, float, float]:
     """How well ``ln g`` is a straight line in ``ln(v - black)``: a linear sensor's shape.
 
     Frame/event consistency fixes ``ln g`` only up to a common scale in weakly blurred frames,
@@ -120,12 +122,14 @@ def linear_fit(response: InverseResponse, black: float | None) -> tuple[float, f
         response: the free inverse response.
         black: the frames' black level, or None to find the one that straightens the curve
             best (below the first knot).
+        above: only the knots at or above this value count (the dark end left out).
 
     Returns:
         ``(black, power, rms)``: the black level, the power the free curve has in
         ``v - black`` and the RMS departure of ``ln g`` from that straight line over the knots.
     """
-    knots, log_g = response.knots, response.log_exposure
+    kept = response.knots >= above
+    knots, log_g = response.knots[kept], response.log_exposure[kept]
 
     def straight(level: float) -> tuple[float, float]:
         x = np.log(np.maximum(knots - level, 1e-12))

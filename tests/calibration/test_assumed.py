@@ -129,6 +129,26 @@ def test_a_response_straight_only_below_zero_is_not_called_linear():
     assert "below any black level a frame can have" in notes.reasons["response"]
 
 
+def test_linear_frames_whose_dark_end_noise_bends_the_curve_are_linear_with_black_at_zero():
+    from davis_io.calibration.estimate import _reviewed_response
+    from davis_io.calibration.response_fit import FrameLevels, InverseResponse
+
+    # Linear frames with black at 0, the thresholds 0.8 of the nominal: ln g = 0.8 ln v, but
+    # noise in the values under 0.1 halves the free curve's slope there. The straightest black
+    # is then below zero, and above the dark end the curve is the line through 0.
+    knots = np.geomspace(0.04, 0.98, 16)
+    log_v = np.log(knots)
+    log_g = 0.8 * np.where(knots >= 0.1, log_v, np.log(0.1) + 0.5 * (log_v - np.log(0.1)))
+    found = type("Found", (), {"response": InverseResponse(knots, log_g - log_g[0])})()
+    notes = Assumptions(lambda line: None)
+    levels = FrameLevels(black_level=0.0, saturation=1.0, low=0.04, high=0.98)
+    lines = []
+    black, saturation, linear = _reviewed_response(found, levels, notes, lines.append)
+    assert "+" in lines[0]  # the straightest black found: below zero
+    assert linear and black == 0.0 and saturation == 1.0 and "response" not in notes.reasons
+    assert "power 0.80 of v to 0.000 RMS" in lines[1]
+
+
 def test_a_flat_profile_locates_nothing():
     assert flat_profile(np.array([0.4085, 0.4101, 0.4120]))  # under 1 % apart
     assert not flat_profile(np.array([0.66, 0.60, 0.59, 0.77]))
