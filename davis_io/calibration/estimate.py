@@ -499,9 +499,13 @@ def calibrate_frames(
         frame_noise(recording.frames, black, saturation, recording.adc_step) if is_linear else None
     )
     if noise:
+        balance = (
+            f"shot noise equals read noise {noise.offset:.4f} above black"
+            if noise.gain > 0
+            else "read noise alone, no shot noise measured"
+        )
         progress(
-            f"frame noise: variance {noise.gain:.2e} x (v - black) + {noise.floor:.2e} "
-            f"(shot noise equals read noise {noise.offset:.4f} above black)"
+            f"frame noise: variance {noise.gain:.2e} x (v - black) + {noise.floor:.2e} ({balance})"
         )
     return SensorCalibration(
         threshold_on=float(theta[0]),
