@@ -99,6 +99,10 @@ DARK_END = 0.1
 """Frame values below this share of full scale are the dark end, where noise bends the free
 curve."""
 
+MIN_BRIGHT_KNOTS = 4
+"""Knots above the dark end a straight line through 0 is judged on at the least (frames whose
+values all lie in the dark end keep the black the search found)."""
+
 Progress = Callable[[str], None]
 
 
@@ -650,6 +654,8 @@ def _linear_above_dark_end(found: _Consistency, progress) -> bool:
     ones (0.77-0.84 measured against 0.80-0.83), which a DAVIS keeps within
     :data:`THRESHOLD_SCALE`; a tone curve that only looks straight is not.
     """
+    if np.count_nonzero(found.response.knots >= DARK_END) < MIN_BRIGHT_KNOTS:
+        return False
     _, power, straightness = linear_fit(found.response, 0.0, above=DARK_END)
     if straightness >= LINEAR_RMS or not THRESHOLD_SCALE.holds(power):
         return False

@@ -148,6 +148,14 @@ def test_linear_frames_whose_dark_end_noise_bends_the_curve_are_linear_with_blac
     assert linear and black == 0.0 and saturation == 1.0 and "response" not in notes.reasons
     assert "power 0.80 of v to 0.000 RMS" in lines[1]
 
+    # Frames that never leave the dark end give the line through 0 nothing to stand on.
+    dark = knots * 0.09
+    found = type("Found", (), {"response": InverseResponse(dark, log_g - log_g[0])})()
+    notes = Assumptions(lambda line: None)
+    levels = FrameLevels(black_level=0.0, saturation=1.0, low=dark[0], high=dark[-1])
+    black, _, linear = _reviewed_response(found, levels, notes, lambda line: None)
+    assert not linear and black == 0.0 and "below any black level" in notes.reasons["response"]
+
 
 def test_a_flat_profile_locates_nothing():
     assert flat_profile(np.array([0.4085, 0.4101, 0.4120]))  # under 1 % apart
