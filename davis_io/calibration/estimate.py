@@ -99,6 +99,10 @@ DARK_END = 0.1
 """Frame values below this share of full scale are the dark end, where noise bends the free
 curve."""
 
+LINEAR_SCALE_SPREAD = 0.1
+"""The thresholds' uncertainty, as a share, where their scale is the linear frames' power: twice
+the largest error of that power measured on linear frames (5 %)."""
+
 MIN_BRIGHT_KNOTS = 4
 """Knots above the dark end a straight line through 0 is judged on at the least (frames whose
 values all lie in the dark end keep the black the search found)."""
@@ -495,10 +499,14 @@ def calibrate_frames(
             "between them (frames black or clipped, or gaps in the stream)"
         )
         return _without_consistency(levels, dead_time, why, notes)
-    theta, spread = _reviewed_thresholds(found, notes)
+    thresholds = _reviewed_thresholds(found, notes)
     latency = _reviewed_latency(found, notes)
     factor_on, factor_off = _reviewed_factors(found.factors, notes)
-    black, saturation, is_linear = _reviewed_response(found, levels, notes, progress)
+    black, saturation, linear_power = _reviewed_response(found, levels, notes, progress)
+    theta, spread, frames_scale = _reviewed_scale(found, thresholds, linear_power, notes)
+    is_linear = linear_power is not None
+    # the free curve's exposures are in units of the thresholds it was solved beside
+    log_exposure = found.response.log_exposure * (frames_scale or 1.0)
     noise = (
         frame_noise(recording.frames, black, saturation, recording.adc_step) if is_linear else None
     )
@@ -524,12 +532,12 @@ def calibrate_frames(
         noise_gain=noise.gain if noise else 0.0,
         noise_floor=noise.floor if noise else 0.0,
         response_value=found.response.knots,
-        response_log_exposure=found.response.log_exposure,
+        response_log_exposure=log_exposure,
         pixel_factor_on=factor_on.reshape(height, width).astype(np.float32),
         pixel_factor_off=factor_off.reshape(height, width).astype(np.float32),
         residual_events=float(np.sqrt(np.mean(found.residual**2)) / (0.5 * theta.sum())),
         pairs=found.problem.pairs,
-        source=_source(notes),
+        source=_source(notes, frames_scale is not None),
         method=_METHOD + (f"; frame noise: {_NOISE_METHOD}" if noise else ""),
         assumed=dict(notes.reasons),
     )
@@ -546,10 +554,12 @@ _NOISE_METHOD = "same-colour neighbours in the smoothest places of each level"
 _NOMINAL = f"the nominal {DEFAULT_THRESHOLD} for ON and OFF, ± 50 %"
 
 
-def _source(notes: Assumptions) -> str:
+def _source(notes: Assumptions, scale_from_frames: bool) -> str:
     if "thresholds" in notes:
         return "assumed"
-    return "measured ratio, nominal scale" if "threshold_scale" in notes else "measured"
+    if "threshold_scale" not in notes:
+        return "measured"
+    return f"measured ratio, {'linear frames' if scale_from_frames else 'nominal'} scale"
 
 
 def _nominal() -> tuple[np.ndarray, np.ndarray]:
@@ -572,13 +582,41 @@ def _reviewed_thresholds(found: _Consistency, notes: Assumptions) -> tuple[np.nd
             _NOMINAL,
         )
         return _nominal()
-    if not found.scale.measured:
+    return found.theta, found.spread
+
+
+def _reviewed_scale(
+    found: _Consistency,
+    thresholds: tuple[np.ndarray, np.ndarray],
+    linear_power: float | None,
+    notes: Assumptions,
+) -> tuple[np.ndarray, np.ndarray, float | None]:
+    """The thresholds at the common scale the blur pins, else at linear frames', else nominal.
+
+    Where the blur leaves the scale free, the thresholds stand at the nominal scale, and so the
+    free curve of frames judged linear is a power of v that is the true thresholds' share of
+    the nominal ones: 0.77-0.84 measured on linear 8-bit frames of sharp exposures against true
+    shares of 0.80-0.83. Events and frames then agree only at that scale.
+
+    Returns:
+        The thresholds, their uncertainty, and the linear frames' scale where it is theirs
+        (None where it is not).
+    """
+    theta, spread = thresholds
+    if found.scale.measured or "thresholds" in notes:
+        return theta, spread, None
+    reason = "the frames are too sharp for the blur to pin the thresholds' common scale"
+    if linear_power is not None and THRESHOLD_SCALE.holds(linear_power):
         notes.add(
             "threshold_scale",
-            "the frames are too sharp for the blur to pin the thresholds' common scale",
-            f"the nominal {DEFAULT_THRESHOLD} with the measured ratio",
+            reason,
+            f"x{linear_power:.2f} of the nominal {DEFAULT_THRESHOLD}, the power of the linear "
+            "frames' free curve, with the measured ratio",
         )
-    return found.theta, found.spread
+        scaled = theta * linear_power
+        return scaled, np.maximum(spread * linear_power, LINEAR_SCALE_SPREAD * scaled), linear_power
+    notes.add("threshold_scale", reason, f"the nominal {DEFAULT_THRESHOLD} with the measured ratio")
+    return theta, spread, None
 
 
 def _reviewed_latency(found: _Consistency, notes: Assumptions) -> int:
@@ -610,8 +648,8 @@ def _reviewed_factors(
 
 def _reviewed_response(
     found: _Consistency, levels: FrameLevels, notes: Assumptions, progress
-) -> tuple[float, float, bool]:
-    """The frames' black and clip levels and whether their response is linear.
+) -> tuple[float, float, float | None]:
+    """The frames' black and clip levels, and the power of v their free curve is if linear.
 
     A linear response needs a black level a DAVIS can have: one its search had to put below
     zero means the curve is not the line it looked like. A curve fitted beside thresholds the
@@ -623,7 +661,7 @@ def _reviewed_response(
             "it was fitted beside thresholds that were not measured",
             "a response the fit learns, black at 0",
         )
-        return levels.black_level, levels.saturation, False
+        return levels.black_level, levels.saturation, None
     pile_up = levels.black_level if levels.black_level > 0 else None
     black, power, straightness = linear_fit(found.response, pile_up)
     is_linear = straightness < LINEAR_RMS
@@ -631,8 +669,9 @@ def _reviewed_response(
         f"response {'linear' if is_linear else 'not linear'}: the free curve is a power "
         f"{power:.2f} of v {'-' if black >= 0 else '+'} {abs(black):.3f} to {straightness:.3f} RMS"
     )
-    if is_linear and pile_up is None and black < 0 and _linear_above_dark_end(found, progress):
-        black = 0.0
+    if is_linear and pile_up is None and black < 0:
+        above = _linear_above_dark_end(found, progress)
+        black, power = (0.0, above) if above is not None else (black, power)
     if is_linear and pile_up is None and not BLACK_LEVEL.holds(black):
         notes.add(
             "response",
@@ -641,11 +680,14 @@ def _reviewed_response(
             "a response the fit learns, black at 0",
         )
         is_linear = False
-    return levels.black_level or (black if is_linear else 0.0), levels.saturation, is_linear
+    black = levels.black_level or (black if is_linear else 0.0)
+    return black, levels.saturation, power if is_linear else None
 
 
-def _linear_above_dark_end(found: _Consistency, progress) -> bool:
-    """Whether a curve straight only below zero is the line of frames with black at 0.
+def _linear_above_dark_end(found: _Consistency, progress) -> float | None:
+    """The power of v above the dark end of a curve straight only below zero, if it is a line.
+
+    The line is that of frames with black at 0; None where the curve is not it.
 
     Noise in the darkest values flattens the free curve's dark end (their errors attenuate the
     slope they are regressed on), which the search for the straightest black reads as a level
@@ -655,16 +697,16 @@ def _linear_above_dark_end(found: _Consistency, progress) -> bool:
     :data:`THRESHOLD_SCALE`; a tone curve that only looks straight is not.
     """
     if np.count_nonzero(found.response.knots >= DARK_END) < MIN_BRIGHT_KNOTS:
-        return False
+        return None
     _, power, straightness = linear_fit(found.response, 0.0, above=DARK_END)
     if straightness >= LINEAR_RMS or not THRESHOLD_SCALE.holds(power):
-        return False
+        return None
     progress(
         f"response linear, black at 0: above {DARK_END:g} of full scale the free curve is a "
         f"power {power:.2f} of v to {straightness:.3f} RMS (the noise of the darkest values "
         "bends it below)"
     )
-    return True
+    return power
 
 
 def _without_consistency(

@@ -145,7 +145,8 @@ def test_linear_frames_whose_dark_end_noise_bends_the_curve_are_linear_with_blac
     lines = []
     black, saturation, linear = _reviewed_response(found, levels, notes, lines.append)
     assert "+" in lines[0]  # the straightest black found: below zero
-    assert linear and black == 0.0 and saturation == 1.0 and "response" not in notes.reasons
+    assert black == 0.0 and saturation == 1.0 and "response" not in notes.reasons
+    assert linear == pytest.approx(0.8, abs=0.005)  # the power above the dark end
     assert "power 0.80 of v to 0.000 RMS" in lines[1]
 
     # Frames that never leave the dark end give the line through 0 nothing to stand on.
@@ -154,7 +155,36 @@ def test_linear_frames_whose_dark_end_noise_bends_the_curve_are_linear_with_blac
     notes = Assumptions(lambda line: None)
     levels = FrameLevels(black_level=0.0, saturation=1.0, low=dark[0], high=dark[-1])
     black, _, linear = _reviewed_response(found, levels, notes, lambda line: None)
-    assert not linear and black == 0.0 and "below any black level" in notes.reasons["response"]
+    assert linear is None and black == 0.0 and "below any black level" in notes.reasons["response"]
+
+
+@pytest.mark.parametrize(
+    ("measured", "power", "scale", "said"),
+    [
+        (True, 0.8, 1.0, None),  # the blur pins the scale: the frames' power is not needed
+        (False, 0.8, 0.8, "x0.80 of the nominal 0.3, the power of the linear frames'"),
+        (False, None, 1.0, "the nominal 0.3 with the measured ratio"),  # not linear
+        (False, 0.3, 1.0, "the nominal 0.3 with the measured ratio"),  # no DAVIS's scale
+    ],
+)
+def test_a_free_scale_is_the_linear_frames_power_where_a_davis_can_have_it(
+    measured, power, scale, said
+):
+    from davis_io.calibration.estimate import _reviewed_scale
+
+    found = type("Found", (), {"scale": type("Scale", (), {"measured": measured})()})()
+    theta, spread = np.array([0.27, 0.33]), np.array([0.01, 0.01])
+    notes = Assumptions(lambda line: None)
+    got, uncertainty, frames_scale = _reviewed_scale(found, (theta, spread), power, notes)
+    np.testing.assert_allclose(got, theta * scale)
+    assert (frames_scale is not None) == (scale != 1.0)
+    if said is None:
+        assert "threshold_scale" not in notes
+        np.testing.assert_allclose(uncertainty, spread)
+    else:
+        assert said in notes.reasons["threshold_scale"]
+    if frames_scale is not None:
+        np.testing.assert_allclose(uncertainty, 0.1 * got)  # the power's own uncertainty
 
 
 def test_a_flat_profile_locates_nothing():
