@@ -41,6 +41,12 @@ class SessionBins:
             counts.
         settled: ``(F, b+1, H, W)`` bool, whether each pixel had fired all it owed at each
             latent time point (:func:`davis_io.settled.settled_points`); None unless asked.
+        lead: ``(F, H, W)`` float32, with ``contrast``: each pixel's ln change from the first
+            exposure of its stretch to the start of this one (the exposures' bins and the events
+            between them), so that two latent points of one stretch differ by a known change;
+            None for count bins.
+        stretch: ``(F,)`` int64, with ``lead``: which unbroken stretch of the stream each
+            exposure belongs to; a gap, or an exposure that lost events, starts a new one.
     """
 
     b: int
@@ -51,6 +57,8 @@ class SessionBins:
     event_count: np.ndarray
     contrast: bool = False
     settled: np.ndarray | None = None
+    lead: np.ndarray | None = None
+    stretch: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -90,6 +90,10 @@ class TrainingData:
         bins_raw: ``(F, b, H, W)`` signed integer event counts without offsets.
         settled: ``(F, b+1, H, W)`` bool, where a pixel had fired all it owed at a latent time
             point (:func:`davis_io.settled.settled_points`); None: everywhere.
+        lead: ``(F, H, W)`` ln change in units of ``threshold`` from the first exposure of the
+            frame's unbroken stretch of the stream to its start (the bins and the events between
+            exposures); None: the stream's changes between exposures are not known.
+        stretch: ``(F,)`` int64, which stretch each frame belongs to (with ``lead``).
         c2w: ``(F, b+1, 4, 4)`` camera-to-world per latent time point, OpenCV axes.
         intrinsics: ``(4,)`` fx, fy, cx, cy in pixels.
         distortion: the lens's OpenCV coefficients ``k1, k2, p1, p2[, k3 ...]`` (empty: a
@@ -121,6 +125,8 @@ class TrainingData:
     mix: np.ndarray
     channel: np.ndarray
     settled: np.ndarray | None = None
+    lead: np.ndarray | None = None
+    stretch: np.ndarray | None = None
     monochrome: bool = False
     threshold: float = 0.3
     cutoff_hz: float = 0.0
@@ -170,6 +176,11 @@ class TrainingData:
         }
         if self.settled is not None:
             expected["settled"] = (frames, b + 1, height, width)
+        if (self.lead is None) != (self.stretch is None):
+            raise TrainingDataError("TrainingData.lead and .stretch come together, or neither")
+        if self.lead is not None:
+            expected["lead"] = (frames, height, width)
+            expected["stretch"] = (frames,)
         for name, shape in expected.items():
             value = getattr(self, name)
             if value.shape != shape or b < 1:

@@ -1,4 +1,8 @@
-"""Random pixel batches of training frames (every pose of an exposure) and of the oracle's truth."""
+"""Random pixel batches of training frames, of spans between frames, and of the oracle's truth.
+
+A training pixel is seen from every pose of its exposure; a span is one pixel at latent points
+of two frames of one stretch of the stream.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +13,7 @@ import torch
 
 from seenerf.data.arrays import TrainingData
 from seenerf.data.subframes import refine_exposure
-from seenerf.model.imaging import RayBatch
+from seenerf.model.imaging import RayBatch, SpanBatch
 from seenerf.render.rays import camera_rays, pixel_coordinates, rays_through
 
 __all__ = ["FrameSampler", "SharpTruthSampler"]
@@ -67,6 +71,7 @@ class FrameSampler:
         known = data.settled if dead_time and data.settled is not None else np.ones(shape, bool)
         self.settled = torch.as_tensor(known, device=device)
         self.device = device
+        self.level, self.stretch = _levels(data, device)
         allowed = np.ones(len(frames) * self.height * self.width, bool)
         allowed[np.asarray(exclude if exclude is not None else [], np.int64)] = False
         active = np.abs(data.bins_raw[frames]).sum(axis=1).reshape(-1) > 0
@@ -77,6 +82,10 @@ class FrameSampler:
 
     def sample(self, count: int, generator: torch.Generator) -> RayBatch:
         """``count`` random pixels of random training frames."""
+        return self.batch_flat(self._draw(count, generator))
+
+    def _draw(self, count: int, generator: torch.Generator) -> torch.Tensor:
+        """Flat indices of ``count`` random pixels, the event share among pixels with events."""
         from_events = int(round(count * self.event_share))
         uniform = self.pool[
             torch.randint(len(self.pool), (count - from_events,), generator=generator)
@@ -88,7 +97,45 @@ class FrameSampler:
             if from_events
             else uniform[:0]
         )
-        return self.batch_flat(torch.cat([uniform, picks]))
+        return torch.cat([uniform, picks])
+
+    def spans(self, count: int, reach: int, generator: torch.Generator) -> SpanBatch:
+        """``count`` random pixels, each at a latent point of two training frames of one stretch.
+
+        The first frame and pixel are drawn as :meth:`sample` draws them, the second frame up to
+        ``reach`` frames away, each latent point at random.
+
+        Raises:
+            ValueError: the data hold no leads (:attr:`TrainingData.lead`).
+        """
+        if self.level is None:
+            raise ValueError("spans need the stream's changes between exposures (lead)")
+        pixels = self.height * self.width
+        flat = self._draw(count, generator)
+        position, pixel = flat // pixels, flat % pixels
+        other = position + torch.randint(-reach, reach + 1, position.shape, generator=generator)
+        other = other.clamp(0, len(self.frames) - 1)
+        frame = torch.stack([self.frames[position], self.frames[other]], dim=1).to(self.device)
+        points = self.level.shape[1]
+        point = torch.randint(points, frame.shape, generator=generator).to(self.device)
+        pixel = pixel.to(self.device)
+        v = torch.div(pixel, self.width, rounding_mode="floor")[:, None]
+        u = (pixel % self.width)[:, None]
+        c2w = self.c2w[:, :: self.subframes][frame, point]
+        if self.correction is not None:
+            c2w = self.correction(c2w.reshape(-1, 1, 4, 4), frame.reshape(-1)).reshape(c2w.shape)
+        xy = self.pixel_xy[pixel].repeat_interleave(2, dim=0)
+        origins, directions = rays_through(c2w.reshape(-1, 4, 4), xy[:, 0], xy[:, 1])
+        level = self.level[frame, point, v, u]
+        settled = self.settled[frame, point, v, u]
+        same = self.stretch[frame[:, 0]] == self.stretch[frame[:, 1]]
+        return SpanBatch(
+            origins.reshape(-1, 2, 3),
+            directions.reshape(-1, 2, 3),
+            self.mix[pixel],
+            level[:, 1] - level[:, 0],
+            same & settled.all(dim=1),
+        )
 
     def batch_flat(self, flat: torch.Tensor) -> RayBatch:
         """The :class:`RayBatch` of flat indices ``position_in_frames * H * W + pixel``."""
@@ -118,6 +165,19 @@ class FrameSampler:
             self.settled[frame, :, v, u],
             self.subframes,
         )
+
+
+def _levels(data: TrainingData, device: str) -> tuple[torch.Tensor | None, torch.Tensor | None]:
+    """Each pixel's ln level at each latent point and each frame's stretch (None without leads).
+
+    ``(F, b+1, H, W)``: the change from the start of the frame's stretch, in thresholds; ``(F,)``.
+    """
+    if data.lead is None:
+        return None, None
+    within = np.cumsum(data.bins, axis=1)
+    level = np.concatenate([data.lead[:, None], data.lead[:, None] + within], axis=1)
+    stretch = torch.as_tensor(data.stretch, device=device)
+    return torch.as_tensor(level.astype(np.float32), device=device), stretch
 
 
 class SharpTruthSampler:

@@ -60,7 +60,8 @@ def load_training_data(
 
     The bins are the session's events in light time, weighted by their pixels' calibrated
     thresholds (:func:`~davis_io.session.contrast_bins`), in units of the mean
-    threshold; the poses are moved to their latent time points.
+    threshold, with each frame's lead from the start of its stretch of the stream; the poses
+    are moved to their latent time points.
 
     Args:
         session_dir: the session folder (calibrated, with poses for ``b``).
@@ -111,6 +112,8 @@ def load_training_data(
             mix=mix,
             channel=channel,
             settled=bins.settled[usable],
+            lead=(bins.lead[usable] / calibration.threshold).astype(np.float32),
+            stretch=bins.stretch[usable],
             monochrome=not session.color_filter.is_color,
             threshold=calibration.threshold,
             cutoff_hz=calibration.cutoff_hz,

@@ -2,7 +2,8 @@
 
 Used by the tests and the benchmark to exercise every part of a fit without a recording: the
 blur is the trapezoid integral over finely sampled sub-frames, the LDR response is a known
-curve, and events are the ideal log-change counts of each bin.
+curve, and events are the ideal log-change counts of each bin, the frames one unbroken stream
+whose leads are the ideal change from the first exposure's start.
 """
 
 from __future__ import annotations
@@ -63,7 +64,7 @@ def plane_scene(
     test_views: int = 2,
     seed: int = 0,
 ) -> TrainingData:
-    """Blurry LDR frames, ideal event bins, latent poses and truth of the plane scene.
+    """Blurry LDR frames, ideal event bins and leads, latent poses and truth of the plane scene.
 
     Args:
         height: image rows.
@@ -95,6 +96,7 @@ def plane_scene(
     latent = sharp[:, ::4]
     log_pixel = np.log((latent * mix).sum(-1))
     bins = (np.diff(log_pixel, axis=1) / 0.3).astype(np.float32)
+    lead = ((log_pixel[:, 0] - log_pixel[:1, 0]) / 0.3).astype(np.float32)
     test = _test_views(test_views, intrinsics, height, width, rng) if test_views else None
     return TrainingData(
         ldr=ldr,
@@ -102,6 +104,8 @@ def plane_scene(
         weights=np.tile(_trapezoid(b + 1), (frames, 1)).astype(np.float32),
         bins=bins,
         bins_raw=np.trunc(bins).astype(np.float32),
+        lead=lead,
+        stretch=np.zeros(frames, np.int64),
         c2w=truth_c2w[:, ::4].astype(np.float32),
         intrinsics=intrinsics.astype(np.float32),
         bounds=np.array([1.0, 3.0], np.float32),

@@ -110,12 +110,17 @@ class DataConfig:
         bins: event bins per exposure b (default: the session's).
         batch_pixels: blurry pixels per step (default: the preset's).
         event_share: fraction of each batch drawn among pixels with events.
+        span_share: spans per step, as a share of the batch's pixels: a pixel seen at latent
+            points of two frames, whose change the events between them give (0: none).
+        span_reach: the most frames apart a span's two points lie.
         validation_share: fraction of training pixels held out for the progress PSNR.
     """
 
     bins: int | None = None
     batch_pixels: int | None = None
     event_share: float = 0.5
+    span_share: float = 0.0
+    span_reach: int = 8
     validation_share: float = 0.01
 
 
@@ -193,6 +198,8 @@ FIELD_BOUNDS: dict[str, Bounds] = {
     "bins": Bounds(1, 64, "bins", integer=True),
     "batch_pixels": Bounds(1, 1_000_000, "pixels", integer=True),
     "event_share": Bounds(0.0, 1.0),
+    "span_share": Bounds(0.0, 4.0),
+    "span_reach": Bounds(0, 100_000, "frames", integer=True),
     "validation_share": Bounds(0.0, 0.5, high_open=True),
     "steps": Bounds(1, 10_000_000, "steps", integer=True),
     "time_budget_s": Bounds(0.0, 30 * 86_400.0, "s", low_open=True),

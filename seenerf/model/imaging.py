@@ -25,6 +25,7 @@ __all__ = [
     "LdrFieldImaging",
     "PointImaging",
     "RayBatch",
+    "SpanBatch",
 ]
 
 RESPONSE_TABLE_SIZE = 16_384
@@ -57,6 +58,27 @@ class RayBatch:
     bins: torch.Tensor
     settled: torch.Tensor
     subframes: int = 1
+
+
+@dataclass
+class SpanBatch:
+    """Pixels seen at two latent points of one stretch of the stream, and the change between.
+
+    Attributes:
+        origins: ``(R, 2, 3)`` ray origins at the span's first and last point; ``directions``
+            likewise.
+        mix: ``(R, 3)`` colour weights of each pixel.
+        change: ``(R,)`` the recorded ln change from the first point to the last, in units of
+            the mean threshold.
+        known: ``(R,)`` bool, the change is whole: both points in one stretch, the pixel settled
+            at each.
+    """
+
+    origins: torch.Tensor
+    directions: torch.Tensor
+    mix: torch.Tensor
+    change: torch.Tensor
+    known: torch.Tensor
 
 
 def _scaled_ldr(

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from seenerf.model.imaging import RayBatch
+from seenerf.model.imaging import RayBatch, SpanBatch
 from seenerf.model.pose_correction import PoseCorrection
 from seenerf.model.variants import Variant
 from seenerf.render.renderer import RadianceRenderer
@@ -103,6 +103,31 @@ class SeeNerfModel(nn.Module):
         if self.event_crf is not None:
             counts = self.event_crf(log_radiance, batch.mix, batch.exposure_s, batch.subframes)
         return Prediction(ldr, counts, log_radiance, num_samples)
+
+    def span_changes(
+        self, spans: SpanBatch, generator: torch.Generator | None = None
+    ) -> list[torch.Tensor]:
+        """``(R,)`` predicted change of each span in units of the threshold, one per pass.
+
+        The change is the ln radiance the event pixel sees at the span's last point less that at
+        its first; the points lie frames apart, where the pixel's low-pass has long settled.
+        """
+        rays = spans.origins.shape[0]
+        passes = self.renderer(
+            spans.origins.reshape(-1, 3),
+            spans.directions.reshape(-1, 3),
+            self.near,
+            self.far,
+            None,
+            generator,
+        )
+        changes = []
+        for rendered in passes:
+            pixel = self.event_crf.pixel_log_radiance(
+                rendered.values.reshape(rays, 2, -1), spans.mix
+            )
+            changes.append((pixel[:, 1] - pixel[:, 0]) / self.event_crf.threshold)
+        return changes
 
     def render_log_radiance(self, origins: torch.Tensor, directions: torch.Tensor) -> torch.Tensor:
         """``(R, 3)`` rendered log radiance of sharp rays (last pass), no jitter."""

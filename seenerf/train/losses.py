@@ -16,6 +16,7 @@ __all__ = [
     "ldr_loss",
     "noise_even",
     "sharp_hdr_loss",
+    "span_loss",
     "tone_mapped_render",
 ]
 
@@ -75,6 +76,15 @@ def event_loss(
         at_last = torch.where(settled[:, point], here, at_last)
         started = started | settled[:, point]
     return total / predicted.numel()
+
+
+def span_loss(predicted: torch.Tensor, measured: torch.Tensor, known: torch.Tensor) -> torch.Tensor:
+    """Mean squared error of the spans' changes, in thresholds, over the spans of known change.
+
+    Zero where no span's change is known.
+    """
+    error = torch.where(known, predicted - measured, 0.0).square().sum()
+    return error / known.sum().clamp(min=1)
 
 
 def hdr_tone_map(hdr: torch.Tensor, scale: torch.Tensor | float) -> torch.Tensor:

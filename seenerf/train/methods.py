@@ -32,6 +32,7 @@ from seenerf.train.losses import (
     ldr_loss,
     noise_even,
     sharp_hdr_loss,
+    span_loss,
     tone_mapped_render,
 )
 
@@ -158,7 +159,8 @@ class RecordingMethod(Method):
     """Trains on the recorded blurry frames and their events, at the estimated poses.
 
     The terms: the frames' LDR error (eq. 15), the events' (weighted by the preset's lambda),
-    the response's anchor, the field's smoothness, and the prior of refined poses.
+    the spans' between frames (weighted as the events), the response's anchor, the field's
+    smoothness, and the prior of refined poses.
     """
 
     @classmethod
@@ -195,6 +197,9 @@ class RecordingMethod(Method):
         )
         self.scale = frame_scale(data, config)
         self.zero = torch.zeros((), device=device)
+        calibrated = events is not None and events.calibrated
+        spans = calibrated and data.lead is not None
+        self.spans = round(config.data.span_share * preset.pixels_per_step) if spans else 0
 
     def step(self, generator: torch.Generator) -> Step:
         """The loss terms of a batch of recorded pixels."""
@@ -215,13 +220,23 @@ class RecordingMethod(Method):
         terms = [
             LossTerm("ldr", 1.0, ldr),
             LossTerm("events", self.preset.event_weight, events),
+            *self._spans(generator),
             LossTerm("anchor", self.config.sensor.anchor_weight, anchor),
             *self._smoothness(),
         ]
         if model.pose_correction is not None:
             terms.append(LossTerm("poses", POSE_PRIOR_WEIGHT, model.pose_correction.prior()))
-        rays = batch.origins.shape[0] * batch.origins.shape[1]
+        rays = batch.origins.shape[0] * batch.origins.shape[1] + 2 * self.spans
         return Step(terms, rays, predictions[-1].num_samples)
+
+    def _spans(self, generator: torch.Generator) -> list[LossTerm]:
+        """The spans' term, where the method draws spans."""
+        if not self.spans:
+            return []
+        spans = self.frames.spans(self.spans, self.config.data.span_reach, generator)
+        changes = self.model.span_changes(spans, generator)
+        error = sum(span_loss(change, spans.change, spans.known) for change in changes)
+        return [LossTerm("spans", self.preset.event_weight, error)]
 
     @torch.no_grad()
     def validation_psnr(self) -> float:

@@ -15,7 +15,7 @@ class FramesOnly(RecordingMethod):
 
     def step(self, generator: torch.Generator) -> Step:
         full = super().step(generator)
-        kept = [term for term in full.terms if term.name != "events"]
+        kept = [term for term in full.terms if term.name not in ("events", "spans")]
         return Step([*kept, LossTerm("toy", 0.0, torch.zeros(()))], full.rays, full.samples)
 
 

@@ -79,3 +79,46 @@ def test_settled_points_must_match_the_bins():
     scene.settled = np.ones((3, 2, 8, 10), bool)
     with pytest.raises(TrainingDataError, match=r"settled has shape \(3, 2, 8, 10\)"):
         scene.validate()
+
+
+def test_spans_join_latent_points_of_one_stretch_and_carry_the_change_between():
+    import dataclasses
+
+    import torch
+
+    from seenerf.data.batching import FrameSampler
+
+    scene = plane_scene(height=8, width=10, frames=4, b=2, test_views=0)
+    lead = np.zeros((4, 8, 10), np.float32)
+    lead[1], lead[2] = 1.0, 5.0  # frame 3 starts a new stretch: its lead is 0 again
+    scene.bins[:] = 0.5
+    settled = np.ones((4, 3, 8, 10), bool)
+    settled[1, 1] = False  # frame 1 mid-exposure: a pixel still owed events there
+    data = dataclasses.replace(
+        scene, lead=lead, stretch=np.array([0, 0, 0, 1]), settled=settled
+    ).validate()
+    sampler = FrameSampler(data, np.arange(4), event_share=0.0)
+    spans = sampler.spans(2000, 2, torch.Generator().manual_seed(0))
+    assert spans.origins.shape == (2000, 2, 3) and spans.directions.shape == (2000, 2, 3)
+    centres = torch.as_tensor(data.c2w[:, :, :3, 3]).reshape(-1, 3)
+    which = torch.cdist(spans.origins.reshape(-1, 3), centres).argmin(dim=1).reshape(-1, 2)
+    frame, point = which // 3, which % 3
+    level = torch.as_tensor(lead[:, 0, 0])[frame] + 0.5 * point
+    expected = level[:, 1] - level[:, 0]
+    torch.testing.assert_close(spans.change, expected.float())
+    same = (frame[:, 0] == 3) == (frame[:, 1] == 3)
+    unsettled = ((frame == 1) & (point == 1)).any(dim=1)
+    assert torch.equal(spans.known, same & ~unsettled)
+    assert (frame[:, 1] - frame[:, 0]).abs().max() == 2 and not same.all()
+
+
+def test_span_loss_counts_known_spans_only():
+    import torch
+
+    from seenerf.train.losses import span_loss
+
+    predicted = torch.tensor([1.0, 2.0, 10.0])
+    measured = torch.tensor([0.0, 0.0, 0.0])
+    known = torch.tensor([True, True, False])
+    assert float(span_loss(predicted, measured, known)) == pytest.approx((1 + 4) / 2)
+    assert float(span_loss(predicted, measured, torch.zeros(3, dtype=torch.bool))) == 0.0

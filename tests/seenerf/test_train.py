@@ -44,6 +44,18 @@ def test_every_variant_trains_a_few_steps(variant, tiny_scene):
     assert _parameters_changed(trainer, before)
 
 
+@pytest.mark.parametrize(("share", "drawn"), [(0.0, 0), (0.5, 3)])
+def test_spans_between_frames_are_a_term_of_their_own_when_asked(share, drawn, tiny_scene):
+    config = _config(span_share=share, steps=2)
+    trainer = Trainer(make_method(tiny_scene, config), log=lambda line: None)
+    assert trainer.method.spans == drawn  # half the batch of 6 pixels
+    trainer.train()
+    assert ("spans" in trainer.last_terms) == bool(drawn)
+    if drawn:
+        # the plane's ideal leads and a field that starts flat: the change is missed
+        assert 0.0 < trainer.last_terms["spans"] < 1e3
+
+
 @pytest.mark.parametrize(
     ("preset", "stated", "used"),
     [
