@@ -71,7 +71,8 @@ class FrameSampler:
         known = data.settled if dead_time and data.settled is not None else np.ones(shape, bool)
         self.settled = torch.as_tensor(known, device=device)
         self.device = device
-        self.level, self.stretch = _levels(data, device)
+        self.level = _levels(data, device)
+        self.stretch_first, self.stretch_last = _stretch_ends(data, frames)
         allowed = np.ones(len(frames) * self.height * self.width, bool)
         allowed[np.asarray(exclude if exclude is not None else [], np.int64)] = False
         active = np.abs(data.bins_raw[frames]).sum(axis=1).reshape(-1) > 0
@@ -103,7 +104,7 @@ class FrameSampler:
         """``count`` random pixels, each at a latent point of two training frames of one stretch.
 
         The first frame and pixel are drawn as :meth:`sample` draws them, the second frame up to
-        ``reach`` frames away, each latent point at random.
+        ``reach`` frames away within the first's stretch, each latent point at random.
 
         Raises:
             ValueError: the data hold no leads (:attr:`TrainingData.lead`).
@@ -113,8 +114,10 @@ class FrameSampler:
         pixels = self.height * self.width
         flat = self._draw(count, generator)
         position, pixel = flat // pixels, flat % pixels
-        other = position + torch.randint(-reach, reach + 1, position.shape, generator=generator)
-        other = other.clamp(0, len(self.frames) - 1)
+        low = torch.maximum(self.stretch_first[position], position - reach)
+        high = torch.minimum(self.stretch_last[position], position + reach)
+        share = torch.rand(position.shape, generator=generator)
+        other = torch.minimum(low + (share * (high - low + 1)).long(), high)
         frame = torch.stack([self.frames[position], self.frames[other]], dim=1).to(self.device)
         points = self.level.shape[1]
         point = torch.randint(points, frame.shape, generator=generator).to(self.device)
@@ -128,13 +131,12 @@ class FrameSampler:
         origins, directions = rays_through(c2w.reshape(-1, 4, 4), xy[:, 0], xy[:, 1])
         level = self.level[frame, point, v, u]
         settled = self.settled[frame, point, v, u]
-        same = self.stretch[frame[:, 0]] == self.stretch[frame[:, 1]]
         return SpanBatch(
             origins.reshape(-1, 2, 3),
             directions.reshape(-1, 2, 3),
             self.mix[pixel],
             level[:, 1] - level[:, 0],
-            same & settled.all(dim=1),
+            settled.all(dim=1),
         )
 
     def batch_flat(self, flat: torch.Tensor) -> RayBatch:
@@ -167,17 +169,26 @@ class FrameSampler:
         )
 
 
-def _levels(data: TrainingData, device: str) -> tuple[torch.Tensor | None, torch.Tensor | None]:
-    """Each pixel's ln level at each latent point and each frame's stretch (None without leads).
+def _levels(data: TrainingData, device: str) -> torch.Tensor | None:
+    """Each pixel's ln level at each latent point, ``(F, b+1, H, W)`` (None without leads).
 
-    ``(F, b+1, H, W)``: the change from the start of the frame's stretch, in thresholds; ``(F,)``.
+    The change from the start of the frame's stretch of the stream, in thresholds.
     """
     if data.lead is None:
-        return None, None
+        return None
     within = np.cumsum(data.bins, axis=1)
     level = np.concatenate([data.lead[:, None], data.lead[:, None] + within], axis=1)
-    stretch = torch.as_tensor(data.stretch, device=device)
-    return torch.as_tensor(level.astype(np.float32), device=device), stretch
+    return torch.as_tensor(level.astype(np.float32), device=device)
+
+
+def _stretch_ends(data: TrainingData, frames: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:
+    """Per position in ``frames``: the first and last position of its run of one stretch."""
+    stretch = np.zeros(len(frames)) if data.stretch is None else data.stretch[frames]
+    starts = np.concatenate([[True], stretch[1:] != stretch[:-1]])
+    run = np.cumsum(starts) - 1
+    first = np.flatnonzero(starts)
+    last = np.concatenate([first[1:], [len(frames)]]) - 1
+    return torch.as_tensor(first[run]), torch.as_tensor(last[run])
 
 
 class SharpTruthSampler:

@@ -119,7 +119,7 @@ class DataConfig:
     bins: int | None = None
     batch_pixels: int | None = None
     event_share: float = 0.5
-    span_share: float = 0.0
+    span_share: float = 0.5
     span_reach: int = 8
     validation_share: float = 0.01
 
