@@ -14,7 +14,8 @@ into BENCHMARKS.md between its blind-benchmark markers; ``--render-only`` prints
 ``--publish`` publishes) ``OUT/blind.json`` as the run left it, fitting nothing. The commit,
 command and machine stated are those at the run's start. ``--merge`` reports the runs left in
 several folders as one, each session from the last folder that has it, every run's commit and
-command stated beside its sessions.
+command stated beside its sessions; a folder may hold a merge itself (``--merge bench-results
+../part`` puts a part run again into what is published).
 """
 
 from __future__ import annotations

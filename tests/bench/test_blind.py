@@ -173,3 +173,25 @@ def test_runs_merged_keep_each_sessions_own_run_and_refuse_other_budgets(tmp_pat
     assert "; 2.0 h." in out
     with pytest.raises(ValueError, match="budget_s"):
         merged_runs([first, {**second, "budget_s": 180.0}])
+
+
+def test_a_part_run_again_merges_into_the_published_merge():
+    from benchlib.blind import merged_runs
+
+    published = one_run("aaaa")
+    rows = {row["key"]: row for row in published["rows"]}
+    first = {**published, "rows": [rows["lamp-s5"], rows["room-s10"]]}
+    second = {**one_run("bbbb"), "wall_s": 7200.0, "rows": [rows["room-s10"]]}
+    merged = merged_runs([first, second])  # as published: lamp-s5 from aaaa, room-s10 from bbbb
+    third = {**one_run("cccc"), "rows": [{**rows["lamp-s5"], "end_to_end_s": 2.0}]}
+    again = merged_runs([merged, third])
+    # aaaa has no session left and is dropped; bbbb keeps its facts and its session.
+    assert [(run["commit"], run["sessions"]) for run in again["runs"]] == [
+        ("bbbb", ["room-s10"]),
+        ("cccc", ["lamp-s5"]),
+    ]
+    assert again["runs"][0]["wall_s"] == 7200.0
+    assert [row["end_to_end_s"] for row in again["rows"]] == [
+        rows["room-s10"]["end_to_end_s"],
+        2.0,
+    ]

@@ -533,8 +533,10 @@ RUN_SETTINGS = ("budget_s", "jobs", "threads_per_fit")
 def merged_runs(documents: list[dict]) -> dict:
     """Several runs' ``blind.json`` documents as one: each session from the last run that has it.
 
-    The document keeps every run's commit, command, machine and wall time (``runs``), and the
-    sessions each one's rows came from, in :data:`BLIND_SESSIONS` order.
+    A document may itself be a merge (the published ``bench-results/blind.json``): its runs count
+    one by one, in their order, so a part run again merges into what was published. The result
+    keeps every run's commit, command, machine and wall time (``runs``), and the sessions each
+    one's rows came from, in :data:`BLIND_SESSIONS` order; a run left with no session is dropped.
 
     Raises:
         ValueError: the runs gave their fits other budgets or shared the machine otherwise.
@@ -545,23 +547,39 @@ def merged_runs(documents: list[dict]) -> dict:
             f"the runs differ in {', '.join(RUN_SETTINGS)} ({sorted(settings)}): their scores "
             "do not compare in one table"
         )
+    runs = [run for document in documents for run in _single_runs(document)]
     rows, source = {}, {}
-    for index, document in enumerate(documents):
-        for row in document["rows"]:
+    for index, (_, run_rows) in enumerate(runs):
+        for row in run_rows:
             rows[row["key"]], source[row["key"]] = row, index
     keys = [spec.key for spec in BLIND_SESSIONS if spec.key in rows]
     return {
         "runs": [
-            {
-                **{name: document[name] for name in ("commit", "command", "machine", "wall_s")},
-                "sessions": [key for key in keys if source[key] == index],
-            }
-            for index, document in enumerate(documents)
+            {**run, "sessions": [key for key in keys if source[key] == index]}
+            for index, (run, _) in enumerate(runs)
             if index in source.values()
         ],
         **{name: documents[0][name] for name in RUN_SETTINGS},
         "rows": [rows[key] for key in keys],
     }
+
+
+RUN_FACTS = ("commit", "command", "machine", "wall_s")
+"""What a report states of each run beside the sessions it measured."""
+
+
+def _single_runs(document: dict) -> list[tuple[dict, list[dict]]]:
+    """A document's runs as (the run's facts, its rows): one for a run, several for a merge."""
+    if "runs" not in document:
+        return [({name: document[name] for name in RUN_FACTS}, document["rows"])]
+    by_key = {row["key"]: row for row in document["rows"]}
+    return [
+        (
+            {name: run[name] for name in RUN_FACTS},
+            [by_key[key] for key in run["sessions"] if key in by_key],
+        )
+        for run in document["runs"]
+    ]
 
 
 def _provenance(document: dict) -> str:
