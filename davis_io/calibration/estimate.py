@@ -24,7 +24,7 @@ from davis_io.calibration.consistency import (
     refine_pixel_factors,
 )
 from davis_io.calibration.dead_time import dead_time_us
-from davis_io.calibration.frame_noise import frame_noise
+from davis_io.calibration.frame_noise import frame_noise, noise_falls_with_level
 from davis_io.calibration.pixel_events import event_path, pixel_events
 from davis_io.calibration.plausible import (
     BLACK_LEVEL,
@@ -491,18 +491,18 @@ def calibrate_frames(
             f"too few events to measure from: {len(recording.times_us)}, "
             f"{density:.3f} per pixel between consecutive frames"
         )
-        return _without_consistency(levels, dead_time, why, notes)
+        return _without_consistency(recording, levels, dead_time, why, notes)
     found = _consistency(recording, levels, seed, progress)
     if found is None:
         why = (
             "no pixel has two pairs of consecutive exposures with usable values and the events "
             "between them (frames black or clipped, or gaps in the stream)"
         )
-        return _without_consistency(levels, dead_time, why, notes)
+        return _without_consistency(recording, levels, dead_time, why, notes)
     thresholds = _reviewed_thresholds(found, notes)
     latency = _reviewed_latency(found, notes)
     factor_on, factor_off = _reviewed_factors(found.factors, notes)
-    black, saturation, linear_power = _reviewed_response(found, levels, notes, progress)
+    black, saturation, linear_power = _response(recording, found, levels, notes, progress)
     theta, spread, frames_scale = _reviewed_scale(found, thresholds, linear_power, notes)
     is_linear = linear_power is not None
     # the free curve's exposures are in units of the thresholds it was solved beside
@@ -646,22 +646,34 @@ def _reviewed_factors(
     return np.ones_like(factors[0]), np.ones_like(factors[1])
 
 
+def _response(
+    recording: CalibrationInput,
+    found: _Consistency,
+    levels: FrameLevels,
+    notes: Assumptions,
+    progress,
+) -> tuple[float, float, float | None]:
+    """The frames' black and clip levels, and the power of v their free curve is if linear.
+
+    A curve fitted beside thresholds the fit could not measure is not measured either (the two
+    trade against each other): the frames' noise alone then tells raw ones
+    (:func:`_unmeasured_response`, power 1). Otherwise the free curve is reviewed.
+    """
+    if "thresholds" not in notes:
+        return _reviewed_response(found, levels, notes, progress)
+    why = "it was fitted beside thresholds that were not measured"
+    raw = _unmeasured_response(recording, levels, why, notes)
+    return levels.black_level, levels.saturation, 1.0 if raw else None
+
+
 def _reviewed_response(
     found: _Consistency, levels: FrameLevels, notes: Assumptions, progress
 ) -> tuple[float, float, float | None]:
     """The frames' black and clip levels, and the power of v their free curve is if linear.
 
     A linear response needs a black level a DAVIS can have: one its search had to put below
-    zero means the curve is not the line it looked like. A curve fitted beside thresholds the
-    fit could not measure is not measured either: the two trade against each other.
+    zero means the curve is not the line it looked like.
     """
-    if "thresholds" in notes:
-        notes.add(
-            "response",
-            "it was fitted beside thresholds that were not measured",
-            "a response the fit learns, black at 0",
-        )
-        return levels.black_level, levels.saturation, None
     pile_up = levels.black_level if levels.black_level > 0 else None
     black, power, straightness = linear_fit(found.response, pile_up)
     is_linear = straightness < LINEAR_RMS
@@ -709,18 +721,55 @@ def _linear_above_dark_end(found: _Consistency, progress) -> float | None:
     return power
 
 
-def _without_consistency(
-    levels: FrameLevels, dead_time: int, why: str, notes: Assumptions
-) -> SensorCalibration:
-    """The nominal sensor with what the frames and events alone measure (levels, dead time).
+def _unmeasured_response(
+    recording: CalibrationInput, levels: FrameLevels, why: str, notes: Assumptions
+) -> bool:
+    """Whether frames whose response could not be measured are taken as raw, linear ones.
 
+    A DAVIS's APS values are raw ADC counts, linear in the light, unless software put a tone
+    curve on them; such a curve shows in the frames' noise, which falls as the level rises
+    (:func:`noise_falls_with_level`). Frames whose noise does not fall are taken as raw; those
+    whose noise falls, or that are too smooth to tell, get a response the fit learns. Either is
+    stored as assumed, with ``why``.
+    """
+    falls = noise_falls_with_level(
+        recording.frames, levels.black_level, levels.saturation, recording.adc_step
+    )
+    if falls is False and BLACK_LEVEL.holds(levels.black_level):
+        notes.add("response", why, _RAW_RESPONSE)
+        return True
+    notes.add("response", why, "a response the fit learns")
+    return False
+
+
+_RAW_RESPONSE = (
+    "linear above the black level, as a raw DAVIS frame's: the frames' noise does not fall as "
+    "their level rises, as a tone curve's would (--response learned learns one)"
+)
+
+
+def _without_consistency(
+    recording: CalibrationInput,
+    levels: FrameLevels,
+    dead_time: int,
+    why: str,
+    notes: Assumptions,
+) -> SensorCalibration:
+    """The nominal sensor with what the frames and events alone measure.
+
+    They measure the levels, the dead time, whether the frames are raw and then their noise.
     ``why``: the reason the frames and events could not measure the rest.
     """
     theta, spread = _nominal()
     notes.add("thresholds", why, _NOMINAL)
     notes.add("latency_us", why, "no latency (0 ms)")
     notes.add("pixel_factors", why, "every pixel's factor 1")
-    notes.add("response", why, "a response the fit learns")
+    raw = _unmeasured_response(recording, levels, why, notes)
+    noise = (
+        frame_noise(recording.frames, levels.black_level, levels.saturation, recording.adc_step)
+        if raw
+        else None
+    )
     return SensorCalibration(
         threshold_on=float(theta[0]),
         threshold_off=float(theta[1]),
@@ -728,8 +777,12 @@ def _without_consistency(
         threshold_off_sd=float(spread[1]),
         black_level=levels.black_level,
         saturation=levels.saturation,
+        response_linear=raw,
         dead_time_us=dead_time,
+        noise_gain=noise.gain if noise else 0.0,
+        noise_floor=noise.floor if noise else 0.0,
         source="assumed",
-        method="the frames' levels and the pixels' dead time measured; nothing else could be",
+        method="the frames' levels, noise trend and the pixels' dead time measured; nothing "
+        "else could be",
         assumed=dict(notes.reasons),
     )

@@ -8,6 +8,10 @@ colours do not mix): white noise of variance ``s`` gives that difference a varia
 ``1.25 s``, and in the smoothest places of a level the scene adds little more (a blurred frame
 has many such places); what it does add grows with the square of the level, a third term of the
 fit that is then dropped.
+
+The same variances tell a tone curve from a raw frame where nothing else can: a curve that
+flattens towards white squeezes the noise of its bright values, so their variance falls below
+that of darker ones, which a raw value's never does (:func:`noise_falls_with_level`).
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FrameNoise", "frame_noise"]
+__all__ = ["FALL_RATIO", "FrameNoise", "frame_noise", "noise_falls_with_level"]
 
 LEVEL_BANDS = 12
 """Bands of equal pixel count the frame levels are cut into; one variance per band."""
@@ -26,6 +30,11 @@ SMOOTH_SHARE = 0.3
 
 MIN_PIXELS = 200
 """Fewest smooth pixels a band needs to count."""
+
+FALL_RATIO = 0.5
+"""A band's noise variance under this share of a darker band's is a fall no raw frame has. The
+emulator's tone curves fell to 0.04-0.18 of their darker bands' (an S-curve, a film curve);
+raw frames, linear or with the scene's texture in their variance, never fell below 0.8."""
 
 
 @dataclass(frozen=True)
@@ -77,6 +86,24 @@ def frame_noise(frames: np.ndarray, black: float, saturation: float, step: float
     if gain <= 0:
         return FrameNoise(0.0, max(float(np.median(bands[:, 1])), rounding))
     return FrameNoise(float(gain), max(float(floor), rounding))
+
+
+def noise_falls_with_level(
+    frames: np.ndarray, black: float, saturation: float, step: float
+) -> bool | None:
+    """Whether the frames' noise variance falls as their level rises, as under a tone curve.
+
+    Args: as :func:`frame_noise`'s.
+
+    Returns:
+        True where a band's variance is under :data:`FALL_RATIO` of a darker band's, False where
+        none is, None where the frames have too few bands of smooth pixels to tell.
+    """
+    bands = _band_variances(np.asarray(frames, np.float64), black, saturation, step)
+    if len(bands) < 3:
+        return None
+    darker_peak = np.maximum.accumulate(bands[:, 1])[:-1]
+    return bool(np.any(bands[1:, 1] < FALL_RATIO * darker_peak))
 
 
 def _band_variances(frames: np.ndarray, black: float, saturation: float, step: float):

@@ -7,9 +7,14 @@ import pytest
 from synthetic_recording import KnownSensor, synthetic_recording
 
 from davis_io.calibration import calibrate_frames
-from davis_io.calibration.estimate import LATENCIES_US, LONGER_LATENCIES_US
+from davis_io.calibration.estimate import (
+    LATENCIES_US,
+    LONGER_LATENCIES_US,
+    CalibrationInput,
+)
 from davis_io.calibration.plausible import Assumptions, flat_profile
 from davis_io.emulator import Response
+from davis_io.emulator.aps import ApsSettings, expose
 from davis_io.gaps import find_gaps
 
 FILM = Response("film", midpoint=0.4, width=1.2)
@@ -62,6 +67,32 @@ def test_with_no_pair_left_only_the_levels_and_dead_time_are_measured(recording)
     assert (calibration.threshold_on, calibration.threshold_off) == (0.3, 0.3)
     assert calibration.threshold_on_sd == 0.15 and not calibration.response_linear
     assert "gaps in the stream" in calibration.assumed["thresholds"]
+
+
+@pytest.mark.parametrize(("response", "raw"), [("linear", True), ("film", False)])
+def test_frames_whose_response_cannot_be_measured_are_raw_if_their_noise_never_falls(response, raw):
+    # Noisy frames of a smooth scene and three events: nothing to link them, so the response
+    # is assumed; the raw frames' shot noise grows with the level, the film curve's falls.
+    settings = ApsSettings(Response(response), gain_per_s=1 / 0.15)
+    rows, columns = np.mgrid[0:120, 0:160]
+    radiance = np.exp(-7 + 8.5 * columns / 160) * (1 + 0.2 * np.sin(rows / 15))
+    rng = np.random.default_rng(4)
+    frames = np.stack([expose(radiance[None], 0.15, settings, rng, np.ones(1)) for _ in range(4)])
+    starts = np.arange(4) * 200_000
+    recording = CalibrationInput(
+        frames=frames / 1023,
+        adc_step=1 / 1023,
+        times_us=np.array([10, 20, 30]),
+        x=np.array([1, 2, 3], np.uint16),
+        y=np.array([1, 1, 1], np.uint16),
+        is_on=np.array([True, False, True]),
+        exposure_start_us=starts,
+        exposure_end_us=starts + 150_000,
+    )
+    calibration = calibrate_frames(recording)
+    assert calibration.response_linear is raw and "response" in calibration.assumed
+    assert ("as a raw DAVIS frame's" in calibration.assumed["response"]) is raw
+    assert (calibration.noise_gain > 0) is raw  # a raw frame's noise is measured for the fit
 
 
 def test_a_recording_with_almost_no_events_assumes_what_the_events_would_measure(recording):

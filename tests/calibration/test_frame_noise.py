@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from davis_io.calibration.frame_noise import frame_noise
+from davis_io.calibration.frame_noise import FALL_RATIO, frame_noise, noise_falls_with_level
+from davis_io.calibration.response_fit import frame_levels
 from davis_io.emulator.aps import ApsSettings, expose, linear_noise
 from davis_io.emulator.response import Response
 
@@ -12,14 +13,14 @@ SETTINGS = ApsSettings(RESPONSE, gain_per_s=1 / 0.15)
 STEP = 1 / 1023
 
 
-def _frames(rng, colour_factors=None, count=6):
+def _frames(rng, colour_factors=None, count=6, settings=SETTINGS):
     """Frames of a smooth scene from near black to past the clip level, each a little apart."""
     rows, columns = np.mgrid[0:120, 0:160]
     factors = np.ones(rows.shape) if colour_factors is None else colour_factors(rows, columns)
     images = []
     for k in range(count):
         radiance = np.exp(-7 + 8.5 * columns / 160) * (1 + 0.2 * np.sin(rows / 15 + k))
-        images.append(expose((radiance * factors)[None], 0.15, SETTINGS, rng, np.ones(1)))
+        images.append(expose((radiance * factors)[None], 0.15, settings, rng, np.ones(1)))
     return np.stack(images) * STEP
 
 
@@ -65,3 +66,25 @@ def test_noise_free_frames_show_only_the_rounding():
     # Shot noise as large as read noise only far above black (110 ADC steps measured, 2.8
     # with the noise): the frame loss stays nearly the plain one.
     assert measured.offset > 30 * STEP
+
+
+@pytest.mark.parametrize(
+    ("response", "falls"),
+    [
+        (RESPONSE, False),  # raw: the shot noise grows with the level
+        (Response("reinhard_gamma"), True),  # a gamma squeezes the bright values' noise
+        (Response("film"), True),
+        (Response("s_curve"), True),
+    ],
+)
+def test_a_tone_curves_noise_falls_as_the_level_rises_and_a_raw_frames_never(response, falls):
+    settings = ApsSettings(response, gain_per_s=1 / 0.15)
+    frames = _frames(np.random.default_rng(2), settings=settings)
+    levels = frame_levels(frames, STEP)  # the clipped values, which have no noise, left out
+    assert noise_falls_with_level(frames, levels.black_level, levels.saturation, STEP) is falls
+
+
+def test_a_frame_too_flat_for_three_bands_tells_nothing():
+    assert FALL_RATIO == 0.5
+    flat = np.full((2, 40, 40), 0.5) + np.random.default_rng(3).normal(0, 0.01, (2, 40, 40))
+    assert noise_falls_with_level(flat, 0.0, 1.0, STEP) is None
