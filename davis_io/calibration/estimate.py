@@ -24,7 +24,7 @@ from davis_io.calibration.consistency import (
     refine_pixel_factors,
 )
 from davis_io.calibration.dead_time import dead_time_us
-from davis_io.calibration.frame_noise import frame_noise, noise_falls_with_level
+from davis_io.calibration.frame_noise import FrameNoise, frame_noise
 from davis_io.calibration.pixel_events import event_path, pixel_events
 from davis_io.calibration.plausible import (
     BLACK_LEVEL,
@@ -502,14 +502,13 @@ def calibrate_frames(
     thresholds = _reviewed_thresholds(found, notes)
     latency = _reviewed_latency(found, notes)
     factor_on, factor_off = _reviewed_factors(found.factors, notes)
-    black, saturation, linear_power = _response(recording, found, levels, notes, progress)
+    black, saturation, linear_power, noise = _response(recording, found, levels, notes, progress)
     theta, spread, frames_scale = _reviewed_scale(found, thresholds, linear_power, notes)
     is_linear = linear_power is not None
     # the free curve's exposures are in units of the thresholds it was solved beside
     log_exposure = found.response.log_exposure * (frames_scale or 1.0)
-    noise = (
-        frame_noise(recording.frames, black, saturation, recording.adc_step) if is_linear else None
-    )
+    if is_linear and noise is None:
+        noise = frame_noise(recording.frames, black, saturation, recording.adc_step)
     if noise:
         balance = (
             f"shot noise equals read noise {noise.offset:.4f} above black"
@@ -652,18 +651,19 @@ def _response(
     levels: FrameLevels,
     notes: Assumptions,
     progress,
-) -> tuple[float, float, float | None]:
-    """The frames' black and clip levels, and the power of v their free curve is if linear.
+) -> tuple[float, float, float | None, FrameNoise | None]:
+    """The frames' levels, their free curve's power if linear, and the noise measured on the way.
 
-    A curve fitted beside thresholds the fit could not measure is not measured either (the two
-    trade against each other): the frames' noise alone then tells raw ones
-    (:func:`_unmeasured_response`, power 1). Otherwise the free curve is reviewed.
+    The noise is that of frames taken as raw (None where none was measured). A curve fitted
+    beside thresholds the fit could not measure is not measured either (the two trade against
+    each other): the frames' noise alone then tells raw ones (:func:`_raw_noise`, power 1).
+    Otherwise the free curve is reviewed.
     """
     if "thresholds" not in notes:
-        return _reviewed_response(found, levels, notes, progress)
+        return (*_reviewed_response(found, levels, notes, progress), None)
     why = "it was fitted beside thresholds that were not measured"
-    raw = _unmeasured_response(recording, levels, why, notes)
-    return levels.black_level, levels.saturation, 1.0 if raw else None
+    noise = _raw_noise(recording, levels, why, notes)
+    return levels.black_level, levels.saturation, None if noise is None else 1.0, noise
 
 
 def _reviewed_response(
@@ -721,25 +721,24 @@ def _linear_above_dark_end(found: _Consistency, progress) -> float | None:
     return power
 
 
-def _unmeasured_response(
+def _raw_noise(
     recording: CalibrationInput, levels: FrameLevels, why: str, notes: Assumptions
-) -> bool:
-    """Whether frames whose response could not be measured are taken as raw, linear ones.
+) -> FrameNoise | None:
+    """The noise of frames whose response could not be measured, where they are taken as raw.
 
     A DAVIS's APS values are raw ADC counts, linear in the light, unless software put a tone
     curve on them; such a curve shows in the frames' noise, which falls as the level rises
-    (:func:`noise_falls_with_level`). Frames whose noise does not fall are taken as raw; those
-    whose noise falls, or that are too smooth to tell, get a response the fit learns. Either is
-    stored as assumed, with ``why``.
+    (:attr:`FrameNoise.falls`). Frames whose noise does not fall are taken as raw and linear
+    (their noise returned, for the fit to weigh them by); those whose noise falls, or that are
+    too smooth to tell, get a response the fit learns (None). Either is stored as assumed, with
+    ``why``.
     """
-    falls = noise_falls_with_level(
-        recording.frames, levels.black_level, levels.saturation, recording.adc_step
-    )
-    if falls is False and BLACK_LEVEL.holds(levels.black_level):
+    noise = frame_noise(recording.frames, levels.black_level, levels.saturation, recording.adc_step)
+    if noise.falls is False and BLACK_LEVEL.holds(levels.black_level):
         notes.add("response", why, _RAW_RESPONSE)
-        return True
+        return noise
     notes.add("response", why, "a response the fit learns")
-    return False
+    return None
 
 
 _RAW_RESPONSE = (
@@ -764,12 +763,7 @@ def _without_consistency(
     notes.add("thresholds", why, _NOMINAL)
     notes.add("latency_us", why, "no latency (0 ms)")
     notes.add("pixel_factors", why, "every pixel's factor 1")
-    raw = _unmeasured_response(recording, levels, why, notes)
-    noise = (
-        frame_noise(recording.frames, levels.black_level, levels.saturation, recording.adc_step)
-        if raw
-        else None
-    )
+    noise = _raw_noise(recording, levels, why, notes)
     return SensorCalibration(
         threshold_on=float(theta[0]),
         threshold_off=float(theta[1]),
@@ -777,7 +771,7 @@ def _without_consistency(
         threshold_off_sd=float(spread[1]),
         black_level=levels.black_level,
         saturation=levels.saturation,
-        response_linear=raw,
+        response_linear=noise is not None,
         dead_time_us=dead_time,
         noise_gain=noise.gain if noise else 0.0,
         noise_floor=noise.floor if noise else 0.0,

@@ -11,7 +11,7 @@ fit that is then dropped.
 
 The same variances tell a tone curve from a raw frame where nothing else can: a curve that
 flattens towards white squeezes the noise of its bright values, so their variance falls below
-that of darker ones, which a raw value's never does (:func:`noise_falls_with_level`).
+that of darker ones, which a raw value's never does (:attr:`FrameNoise.falls`).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FALL_RATIO", "FrameNoise", "frame_noise", "noise_falls_with_level"]
+__all__ = ["FALL_RATIO", "FrameNoise", "frame_noise"]
 
 LEVEL_BANDS = 12
 """Bands of equal pixel count the frame levels are cut into; one variance per band."""
@@ -44,10 +44,13 @@ class FrameNoise:
     Attributes:
         gain: variance per unit of value above black (the shot noise; 0 when none shows).
         floor: variance at the black level (read noise and rounding).
+        falls: whether a level band's variance is under :data:`FALL_RATIO` of a darker band's,
+            as under a tone curve and never in raw frames; None with too few bands to tell.
     """
 
     gain: float
     floor: float
+    falls: bool | None = None
 
     @property
     def offset(self) -> float:
@@ -62,7 +65,7 @@ def _shifted(frames: np.ndarray, rows: int, columns: int) -> np.ndarray:
 
 
 def frame_noise(frames: np.ndarray, black: float, saturation: float, step: float) -> FrameNoise:
-    """Measure the noise of linear frames against their level.
+    """Measure the frames' noise against their level, and whether it falls as the level rises.
 
     Args:
         frames: ``(F, H, W)`` normalised frame values (raw: mono or a colour mosaic).
@@ -71,39 +74,23 @@ def frame_noise(frames: np.ndarray, black: float, saturation: float, step: float
         step: one ADC step, normalised (its rounding is the least variance there can be).
 
     Returns:
-        The fitted line; gain 0 and the floor at the rounding's variance when the frames show
-        no noise that grows with the signal.
+        The fitted line (meant for linear frames); gain 0 and the floor at the rounding's
+        variance when the frames show no noise that grows with the signal.
     """
     rounding = step * step / 12
     bands = _band_variances(np.asarray(frames, np.float64), black, saturation, step)
     if len(bands) < 3:
         return FrameNoise(0.0, rounding)
+    darker_peak = np.maximum.accumulate(bands[:-1, 1])
+    falls = bool(np.any(bands[1:, 1] < FALL_RATIO * darker_peak))
     weights = 1 / np.maximum(bands[:, 1], rounding)  # each band's relative error alike
     design = np.column_stack([bands[:, 0], np.ones(len(bands)), bands[:, 0] ** 2])
     gain, floor, _texture = np.linalg.lstsq(
         design * weights[:, None], bands[:, 1] * weights, rcond=None
     )[0]
     if gain <= 0:
-        return FrameNoise(0.0, max(float(np.median(bands[:, 1])), rounding))
-    return FrameNoise(float(gain), max(float(floor), rounding))
-
-
-def noise_falls_with_level(
-    frames: np.ndarray, black: float, saturation: float, step: float
-) -> bool | None:
-    """Whether the frames' noise variance falls as their level rises, as under a tone curve.
-
-    Args: as :func:`frame_noise`'s.
-
-    Returns:
-        True where a band's variance is under :data:`FALL_RATIO` of a darker band's, False where
-        none is, None where the frames have too few bands of smooth pixels to tell.
-    """
-    bands = _band_variances(np.asarray(frames, np.float64), black, saturation, step)
-    if len(bands) < 3:
-        return None
-    darker_peak = np.maximum.accumulate(bands[:, 1])[:-1]
-    return bool(np.any(bands[1:, 1] < FALL_RATIO * darker_peak))
+        return FrameNoise(0.0, max(float(np.median(bands[:, 1])), rounding), falls)
+    return FrameNoise(float(gain), max(float(floor), rounding), falls)
 
 
 def _band_variances(frames: np.ndarray, black: float, saturation: float, step: float):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from davis_io.calibration.frame_noise import FALL_RATIO, frame_noise, noise_falls_with_level
+from davis_io.calibration.frame_noise import FALL_RATIO, frame_noise
 from davis_io.calibration.response_fit import frame_levels
 from davis_io.emulator.aps import ApsSettings, expose, linear_noise
 from davis_io.emulator.response import Response
@@ -81,10 +81,10 @@ def test_a_tone_curves_noise_falls_as_the_level_rises_and_a_raw_frames_never(res
     settings = ApsSettings(response, gain_per_s=1 / 0.15)
     frames = _frames(np.random.default_rng(2), settings=settings)
     levels = frame_levels(frames, STEP)  # the clipped values, which have no noise, left out
-    assert noise_falls_with_level(frames, levels.black_level, levels.saturation, STEP) is falls
+    assert frame_noise(frames, levels.black_level, levels.saturation, STEP).falls is falls
 
 
 def test_a_frame_too_flat_for_three_bands_tells_nothing():
     assert FALL_RATIO == 0.5
     flat = np.full((2, 40, 40), 0.5) + np.random.default_rng(3).normal(0, 0.01, (2, 40, 40))
-    assert noise_falls_with_level(flat, 0.0, 1.0, STEP) is None
+    assert frame_noise(flat, 0.0, 1.0, STEP).falls is None
