@@ -149,6 +149,19 @@ class TrainingData:
         return int(self.bins.shape[1])
 
     @property
+    def lone_frames(self) -> np.ndarray:
+        """``(F,)`` bool: frames alone in their stretch of the event stream.
+
+        No events tie such a frame to another (a recording made view by view, or exposures
+        between gaps): only its own exposure's events tell what it clipped. All False where the
+        stretches are not known.
+        """
+        if self.stretch is None:
+            return np.zeros(self.num_frames, bool)
+        _, which, members = np.unique(self.stretch, return_inverse=True, return_counts=True)
+        return members[which] == 1
+
+    @property
     def image_size(self) -> tuple[int, int]:
         """Sensor ``(height, width)`` in pixels."""
         return int(self.ldr.shape[1]), int(self.ldr.shape[2])

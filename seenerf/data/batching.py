@@ -16,7 +16,7 @@ from seenerf.data.subframes import refine_exposure
 from seenerf.model.imaging import RayBatch, SpanBatch
 from seenerf.render.rays import camera_rays, pixel_coordinates, rays_through
 
-__all__ = ["FrameSampler", "SharpTruthSampler"]
+__all__ = ["FrameSampler", "SharpTruthSampler", "compared_points"]
 
 
 class FrameSampler:
@@ -33,6 +33,9 @@ class FrameSampler:
         dead_time: the fit models the pixels' dead time, so batches carry where each pixel was
             settled (``data.settled``); False: every latent point counts as settled, so each bin
             is compared alone.
+        lone_exposure_spans: the events of frames alone in their stretch of the stream
+            (``data.lone_frames``) are compared over the whole exposure
+            (:func:`compared_points`).
         correction: ``correction(c2w, frame)`` gives a batch's poses as the fit refines them
             (:class:`~seenerf.model.pose_correction.PoseCorrection`), or None for the poses
             as given.
@@ -49,6 +52,7 @@ class FrameSampler:
         device: str = "cpu",
         subframes: int = 1,
         dead_time: bool = True,
+        lone_exposure_spans: bool = False,
         correction: Callable[[torch.Tensor, torch.Tensor], torch.Tensor] | None = None,
     ):
         self.height, self.width = data.image_size
@@ -69,7 +73,8 @@ class FrameSampler:
         self.bins = torch.as_tensor(data.bins if calibrated else data.bins_raw, device=device)
         shape = (data.num_frames, data.num_bins + 1, self.height, self.width)
         known = data.settled if dead_time and data.settled is not None else np.ones(shape, bool)
-        self.settled = torch.as_tensor(known, device=device)
+        whole = data.lone_frames if lone_exposure_spans else np.zeros(data.num_frames, bool)
+        self.settled = torch.as_tensor(compared_points(known, whole), device=device)
         self.device = device
         self.level = _levels(data, device)
         self.stretch_first, self.stretch_last = _stretch_ends(data, frames)
@@ -179,6 +184,26 @@ def _levels(data: TrainingData, device: str) -> torch.Tensor | None:
     within = np.cumsum(data.bins, axis=1)
     level = np.concatenate([data.lead[:, None], data.lead[:, None] + within], axis=1)
     return torch.as_tensor(level.astype(np.float32), device=device)
+
+
+def compared_points(settled: np.ndarray, whole: np.ndarray) -> np.ndarray:
+    """The latent points between which each frame's event counts are compared.
+
+    The points where each pixel was settled, less the inner points of the frames compared over
+    the whole exposure: their counts are then compared as one span from the first latent
+    point to the last (:func:`seenerf.train.losses.event_loss`), where the pixel was settled
+    at both.
+
+    Args:
+        settled: ``(F, b+1, H, W)`` bool, where each pixel was settled.
+        whole: ``(F,)`` bool, the frames compared over the whole exposure.
+
+    Returns:
+        ``(F, b+1, H, W)`` bool, a new array.
+    """
+    points = np.array(settled, bool)
+    points[np.asarray(whole, bool), 1:-1] = False
+    return points
 
 
 def _stretch_ends(data: TrainingData, frames: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:

@@ -113,6 +113,11 @@ class DataConfig:
         span_share: spans per step, as a share of the batch's pixels: a pixel seen at latent
             points of two frames, whose change the events between them give (0: none).
         span_reach: the most frames apart a span's two points lie.
+        lone_exposure_spans: frames alone in their stretch of the event stream (recorded view
+            by view, or between gaps) compare their events over the whole exposure, first
+            latent point to last, instead of bin by bin. With no events between frames to
+            correct them, a pose error of a fraction of a pixel moves an edge's crossing into
+            another bin, and bin by bin the fit hedges with a fraction of the edge's contrast.
         validation_share: fraction of training pixels held out for the progress PSNR.
     """
 
@@ -121,6 +126,7 @@ class DataConfig:
     event_share: float = 0.5
     span_share: float = 0.5
     span_reach: int = 8
+    lone_exposure_spans: bool = True
     validation_share: float = 0.01
 
 

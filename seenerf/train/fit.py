@@ -147,6 +147,13 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         f"image motion between latent poses: median {travel_px:.1f} px at the mean depth; "
         f"{config.model.subframes} pose(s) per bin in the blur integral"
     )
+    lone = int(data.lone_frames.sum())
+    if lone and config.data.lone_exposure_spans and method.model.event_crf is not None:
+        log(
+            f"{lone} of {data.num_frames} frames alone in their stretch of the event stream: "
+            "their events are compared over the whole exposure, not bin by bin "
+            "(--no-lone-exposure-spans compares them bin by bin)"
+        )
     if isinstance(method.model.crf, LinearCrf):
         crf = method.model.crf
         log(

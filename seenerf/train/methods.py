@@ -193,6 +193,7 @@ class RecordingMethod(Method):
             device=device,
             subframes=config.model.subframes,
             dead_time=config.sensor.dead_time,
+            lone_exposure_spans=config.data.lone_exposure_spans,
             correction=model.pose_correction,
         )
         self.scale = frame_scale(data, config)

@@ -74,6 +74,40 @@ def test_batches_carry_where_each_pixel_was_settled(use_settled):
     assert batch.settled.tolist() == np.asarray(expected, bool).tolist()
 
 
+def test_lone_frames_are_those_alone_in_their_stretch_of_the_stream():
+    import dataclasses
+
+    scene = plane_scene(height=8, width=10, frames=5, b=2, test_views=0)
+    assert scene.lone_frames.tolist() == [False] * 5  # stretches not known
+    lead = np.zeros((5, 8, 10), np.float32)
+    data = dataclasses.replace(scene, lead=lead, stretch=np.array([0, 0, 4, 7, 7])).validate()
+    assert data.lone_frames.tolist() == [False, False, True, False, False]
+
+
+@pytest.mark.parametrize("lone_exposure_spans", [True, False])
+def test_a_lone_frame_compares_its_events_over_the_whole_exposure(lone_exposure_spans):
+    import dataclasses
+
+    import torch
+
+    from seenerf.data.batching import FrameSampler
+
+    scene = plane_scene(height=8, width=10, frames=3, b=3, test_views=0)
+    settled = np.ones((3, 4, 8, 10), bool)
+    settled[1, 3, 2, 2] = False  # frame 1's last point: that pixel still owed events there
+    data = dataclasses.replace(
+        scene,
+        lead=np.zeros((3, 8, 10), np.float32),
+        stretch=np.array([0, 0, 1]),
+        settled=settled,
+    ).validate()
+    sampler = FrameSampler(data, np.arange(3), lone_exposure_spans=lone_exposure_spans)
+    batch = sampler.batch(torch.tensor([2, 1, 2]), torch.tensor([0, 2 * 10 + 2, 2 * 10 + 2]))
+    whole = [True, False, False, True] if lone_exposure_spans else [True] * 4
+    assert batch.settled.tolist() == [whole, [True, True, True, False], whole]
+    assert data.settled[2].all()  # the data's own array is left as it was
+
+
 def test_settled_points_must_match_the_bins():
     scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=1)
     scene.settled = np.ones((3, 2, 8, 10), bool)

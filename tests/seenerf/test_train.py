@@ -101,6 +101,8 @@ def test_frames_measured_linear_get_the_linear_response_unless_another_is_asked(
         ([1, 0, 1, 1, 0], 2 / 4),
         # Nothing settled before the last point: no span has two settled ends.
         ([0, 0, 0, 0, 1], 0.0),
+        # Only the ends settled (a lone frame's whole exposure): one span, error 2 - 2 = 0.
+        ([1, 0, 0, 0, 1], 0.0),
     ],
 )
 def test_event_loss_compares_counts_between_settled_points(settled, expected):
