@@ -16,7 +16,7 @@ from seenerf.data.subframes import refine_exposure
 from seenerf.model.imaging import RayBatch, SpanBatch
 from seenerf.render.rays import camera_rays, pixel_coordinates, rays_through
 
-__all__ = ["FrameSampler", "SharpTruthSampler", "compared_points"]
+__all__ = ["FrameSampler", "SharpTruthSampler", "exposure_ends"]
 
 
 class FrameSampler:
@@ -33,9 +33,9 @@ class FrameSampler:
         dead_time: the fit models the pixels' dead time, so batches carry where each pixel was
             settled (``data.settled``); False: every latent point counts as settled, so each bin
             is compared alone.
-        lone_exposure_spans: the events of frames alone in their stretch of the stream
-            (``data.lone_frames``) are compared over the whole exposure
-            (:func:`compared_points`).
+        lone_exposure_spans: batches mark the whole exposures of frames alone in their stretch
+            of the stream (``data.lone_frames``), whose events are compared as one span as well
+            (:func:`exposure_ends`).
         correction: ``correction(c2w, frame)`` gives a batch's poses as the fit refines them
             (:class:`~seenerf.model.pose_correction.PoseCorrection`), or None for the poses
             as given.
@@ -73,8 +73,9 @@ class FrameSampler:
         self.bins = torch.as_tensor(data.bins if calibrated else data.bins_raw, device=device)
         shape = (data.num_frames, data.num_bins + 1, self.height, self.width)
         known = data.settled if dead_time and data.settled is not None else np.ones(shape, bool)
-        whole = data.lone_frames if lone_exposure_spans else np.zeros(data.num_frames, bool)
-        self.settled = torch.as_tensor(compared_points(known, whole), device=device)
+        self.settled = torch.as_tensor(known, device=device)
+        lone = data.lone_frames if lone_exposure_spans else np.zeros(data.num_frames, bool)
+        self.lone = torch.as_tensor(lone, device=device)
         self.device = device
         self.level = _levels(data, device)
         self.stretch_first, self.stretch_last = _stretch_ends(data, frames)
@@ -160,6 +161,7 @@ class FrameSampler:
         poses = c2w.shape[1]
         xy = self.pixel_xy[pixel].repeat_interleave(poses, dim=0)
         origins, directions = rays_through(c2w.reshape(-1, 4, 4), xy[:, 0], xy[:, 1])
+        settled = self.settled[frame, :, v, u]
         return RayBatch(
             origins.reshape(-1, poses, 3),
             directions.reshape(-1, poses, 3),
@@ -169,8 +171,9 @@ class FrameSampler:
             self.channel[pixel],
             self.ldr[frame, v, u],
             self.bins[frame, :, v, u],
-            self.settled[frame, :, v, u],
+            settled,
             self.subframes,
+            exposure_ends(settled, self.lone[frame]),
         )
 
 
@@ -186,24 +189,22 @@ def _levels(data: TrainingData, device: str) -> torch.Tensor | None:
     return torch.as_tensor(level.astype(np.float32), device=device)
 
 
-def compared_points(settled: np.ndarray, whole: np.ndarray) -> np.ndarray:
-    """The latent points between which each frame's event counts are compared.
+def exposure_ends(settled: torch.Tensor, lone: torch.Tensor) -> torch.Tensor:
+    """The latent points that bound each lone pixel's whole exposure, where it was settled.
 
-    The points where each pixel was settled, less the inner points of the frames compared over
-    the whole exposure: their counts are then compared as one span from the first latent
-    point to the last (:func:`seenerf.train.losses.event_loss`), where the pixel was settled
-    at both.
+    Compared between these alone (:func:`seenerf.train.losses.event_loss`), a pixel's events
+    count as one span from the exposure's first latent point to its last.
 
     Args:
-        settled: ``(F, b+1, H, W)`` bool, where each pixel was settled.
-        whole: ``(F,)`` bool, the frames compared over the whole exposure.
+        settled: ``(R, b+1)`` bool, where each pixel was settled.
+        lone: ``(R,)`` bool, the pixels of frames compared over their whole exposure.
 
     Returns:
-        ``(F, b+1, H, W)`` bool, a new array.
+        ``(R, b+1)`` bool: the first and last points of lone pixels where settled, else False.
     """
-    points = np.array(settled, bool)
-    points[np.asarray(whole, bool), 1:-1] = False
-    return points
+    ends = torch.zeros_like(settled)
+    ends[:, 0], ends[:, -1] = settled[:, 0], settled[:, -1]
+    return ends & lone[:, None]
 
 
 def _stretch_ends(data: TrainingData, frames: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:

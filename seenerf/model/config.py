@@ -115,9 +115,10 @@ class DataConfig:
         span_reach: the most frames apart a span's two points lie.
         lone_exposure_spans: frames alone in their stretch of the event stream (recorded view
             by view, or between gaps) compare their events over the whole exposure, first
-            latent point to last, instead of bin by bin. With no events between frames to
+            latent point to last, as well as bin by bin. With no events between frames to
             correct them, a pose error of a fraction of a pixel moves an edge's crossing into
-            another bin, and bin by bin the fit hedges with a fraction of the edge's contrast.
+            another bin, and bin by bin alone the fit hedges with a fraction of the edge's
+            contrast.
         validation_share: fraction of training pixels held out for the progress PSNR.
     """
 

@@ -151,8 +151,8 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     if lone and config.data.lone_exposure_spans and method.model.event_crf is not None:
         log(
             f"{lone} of {data.num_frames} frames alone in their stretch of the event stream: "
-            "their events are compared over the whole exposure, not bin by bin "
-            "(--no-lone-exposure-spans compares them bin by bin)"
+            "their events are compared over the whole exposure as well as bin by bin "
+            "(--no-lone-exposure-spans: bin by bin alone)"
         )
     if isinstance(method.model.crf, LinearCrf):
         crf = method.model.crf

@@ -159,6 +159,7 @@ class RecordingMethod(Method):
     """Trains on the recorded blurry frames and their events, at the estimated poses.
 
     The terms: the frames' LDR error (eq. 15), the events' (weighted by the preset's lambda),
+    lone frames' whole exposures' (weighted as the events),
     the spans' between frames (weighted as the events), the response's anchor, the field's
     smoothness, and the prior of refined poses.
     """
@@ -221,6 +222,7 @@ class RecordingMethod(Method):
         terms = [
             LossTerm("ldr", 1.0, ldr),
             LossTerm("events", self.preset.event_weight, events),
+            *self._exposures(predictions, batch),
             *self._spans(generator),
             LossTerm("anchor", self.config.sensor.anchor_weight, anchor),
             *self._smoothness(),
@@ -229,6 +231,17 @@ class RecordingMethod(Method):
             terms.append(LossTerm("poses", POSE_PRIOR_WEIGHT, model.pose_correction.prior()))
         rays = batch.origins.shape[0] * batch.origins.shape[1] + 2 * self.spans
         return Step(terms, rays, predictions[-1].num_samples)
+
+    def _exposures(self, predictions, batch) -> list[LossTerm]:
+        """The whole exposures' term, where the session has lone frames and the variant events.
+
+        Bin by bin, a lone frame's events ask the field for each edge's crossing within a bin
+        its poses cannot place that finely; over the whole exposure, for the change alone.
+        """
+        if not self.frames.lone.any() or predictions[-1].counts is None:
+            return []
+        error = sum(event_loss(p.counts, batch.bins, batch.exposure_ends) for p in predictions)
+        return [LossTerm("exposures", self.preset.event_weight, error)]
 
     def _spans(self, generator: torch.Generator) -> list[LossTerm]:
         """The spans' term, where the method draws spans."""

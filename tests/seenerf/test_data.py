@@ -85,7 +85,7 @@ def test_lone_frames_are_those_alone_in_their_stretch_of_the_stream():
 
 
 @pytest.mark.parametrize("lone_exposure_spans", [True, False])
-def test_a_lone_frame_compares_its_events_over_the_whole_exposure(lone_exposure_spans):
+def test_a_lone_frames_batch_marks_its_whole_exposure(lone_exposure_spans):
     import dataclasses
 
     import torch
@@ -94,7 +94,7 @@ def test_a_lone_frame_compares_its_events_over_the_whole_exposure(lone_exposure_
 
     scene = plane_scene(height=8, width=10, frames=3, b=3, test_views=0)
     settled = np.ones((3, 4, 8, 10), bool)
-    settled[1, 3, 2, 2] = False  # frame 1's last point: that pixel still owed events there
+    settled[2, 3, 2, 2] = False  # frame 2's last point: that pixel still owed events there
     data = dataclasses.replace(
         scene,
         lead=np.zeros((3, 8, 10), np.float32),
@@ -103,9 +103,10 @@ def test_a_lone_frame_compares_its_events_over_the_whole_exposure(lone_exposure_
     ).validate()
     sampler = FrameSampler(data, np.arange(3), lone_exposure_spans=lone_exposure_spans)
     batch = sampler.batch(torch.tensor([2, 1, 2]), torch.tensor([0, 2 * 10 + 2, 2 * 10 + 2]))
-    whole = [True, False, False, True] if lone_exposure_spans else [True] * 4
-    assert batch.settled.tolist() == [whole, [True, True, True, False], whole]
-    assert data.settled[2].all()  # the data's own array is left as it was
+    assert batch.settled.tolist() == [[True] * 4, [True] * 4, [True, True, True, False]]
+    # Frame 2's pixel at (2, 2) had not settled at the end: its exposure makes no span.
+    whole = [[True, False, False, True], [False] * 4, [True, False, False, False]]
+    assert batch.exposure_ends.tolist() == (whole if lone_exposure_spans else [[False] * 4] * 3)
 
 
 def test_settled_points_must_match_the_bins():

@@ -144,6 +144,24 @@ def test_linear_frames_of_measured_noise_are_compared_on_the_noise_even_scale():
     assert frame_scale(scene, _config())(values) is values
 
 
+@pytest.mark.parametrize(
+    ("stretch", "lone_exposure_spans", "expected"),
+    [([0, 1, 2], True, True), ([0, 1, 2], False, False), ([0, 0, 0], True, False)],
+)
+def test_lone_frames_add_their_whole_exposures_to_the_loss(stretch, lone_exposure_spans, expected):
+    scene = plane_scene(height=8, width=10, frames=3, b=2, test_views=0)
+    scene.lead, scene.stretch = np.zeros((3, 8, 10), np.float32), np.array(stretch)
+    config = _config(lone_exposure_spans=lone_exposure_spans)
+    method = make_method(scene, config)
+    step = method.step(torch.Generator().manual_seed(0))
+    terms = {term.name: term for term in step.terms}
+    assert ("exposures" in terms) is expected
+    if expected:
+        # Over a whole exposure of two bins the bins' errors add: (r1 + r2)^2 <= 2 (r1^2 + r2^2).
+        assert terms["exposures"].weight == terms["events"].weight
+        assert 0 < float(terms["exposures"].value) <= 2 * float(terms["events"].value)
+
+
 def test_multi_exposure_needs_and_uses_several_exposures(tiny_scene):
     with pytest.raises(ConfigError, match="at least two exposures"):
         make_method(tiny_scene, _config(variant="multi-exposure"))
