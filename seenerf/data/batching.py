@@ -16,7 +16,7 @@ from seenerf.data.subframes import refine_exposure
 from seenerf.model.imaging import RayBatch, SpanBatch
 from seenerf.render.rays import camera_rays, pixel_coordinates, rays_through
 
-__all__ = ["FrameSampler", "SharpTruthSampler", "exposure_ends"]
+__all__ = ["FrameSampler", "SharpTruthSampler"]
 
 
 class FrameSampler:
@@ -33,9 +33,9 @@ class FrameSampler:
         dead_time: the fit models the pixels' dead time, so batches carry where each pixel was
             settled (``data.settled``); False: every latent point counts as settled, so each bin
             is compared alone.
-        lone_exposure_spans: batches mark the whole exposures of frames alone in their stretch
-            of the stream (``data.lone_frames``), whose events are compared as one span as well
-            (:func:`exposure_ends`).
+        lone_exposure_spans: batches mark the pixels of frames alone in their stretch of the
+            stream (``data.lone_frames``), whose events are compared over their whole exposure
+            as well (:func:`seenerf.train.losses.exposure_loss`).
         correction: ``correction(c2w, frame)`` gives a batch's poses as the fit refines them
             (:class:`~seenerf.model.pose_correction.PoseCorrection`), or None for the poses
             as given.
@@ -161,7 +161,6 @@ class FrameSampler:
         poses = c2w.shape[1]
         xy = self.pixel_xy[pixel].repeat_interleave(poses, dim=0)
         origins, directions = rays_through(c2w.reshape(-1, 4, 4), xy[:, 0], xy[:, 1])
-        settled = self.settled[frame, :, v, u]
         return RayBatch(
             origins.reshape(-1, poses, 3),
             directions.reshape(-1, poses, 3),
@@ -171,9 +170,9 @@ class FrameSampler:
             self.channel[pixel],
             self.ldr[frame, v, u],
             self.bins[frame, :, v, u],
-            settled,
+            self.settled[frame, :, v, u],
             self.subframes,
-            exposure_ends(settled, self.lone[frame]),
+            self.lone[frame],
         )
 
 
@@ -187,24 +186,6 @@ def _levels(data: TrainingData, device: str) -> torch.Tensor | None:
     within = np.cumsum(data.bins, axis=1)
     level = np.concatenate([data.lead[:, None], data.lead[:, None] + within], axis=1)
     return torch.as_tensor(level.astype(np.float32), device=device)
-
-
-def exposure_ends(settled: torch.Tensor, lone: torch.Tensor) -> torch.Tensor:
-    """The latent points that bound each lone pixel's whole exposure, where it was settled.
-
-    Compared between these alone (:func:`seenerf.train.losses.event_loss`), a pixel's events
-    count as one span from the exposure's first latent point to its last.
-
-    Args:
-        settled: ``(R, b+1)`` bool, where each pixel was settled.
-        lone: ``(R,)`` bool, the pixels of frames compared over their whole exposure.
-
-    Returns:
-        ``(R, b+1)`` bool: the first and last points of lone pixels where settled, else False.
-    """
-    ends = torch.zeros_like(settled)
-    ends[:, 0], ends[:, -1] = settled[:, 0], settled[:, -1]
-    return ends & lone[:, None]
 
 
 def _stretch_ends(data: TrainingData, frames: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:

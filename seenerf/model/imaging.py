@@ -46,9 +46,8 @@ class RayBatch:
         settled: ``(R, b+1)`` bool, where the pixel had fired all it owed at a latent pose (the
             event loss compares counts between such poses).
         subframes: m; every m-th pose is a latent pose, where the event model looks.
-        exposure_ends: ``(R, b+1)`` bool, the first and last latent points of pixels whose
-            events are compared over their whole exposure as well, where settled; None or all
-            False: no pixel's.
+        lone: ``(R,)`` bool, the pixels whose events are compared over their whole exposure
+            as well (of frames alone in their stretch of the stream); None: no pixel's.
     """
 
     origins: torch.Tensor
@@ -61,7 +60,7 @@ class RayBatch:
     bins: torch.Tensor
     settled: torch.Tensor
     subframes: int = 1
-    exposure_ends: torch.Tensor | None = None
+    lone: torch.Tensor | None = None
 
 
 @dataclass

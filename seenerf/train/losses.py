@@ -14,6 +14,7 @@ __all__ = [
     "NOISE_REFERENCE",
     "SPAN_ROBUST",
     "event_loss",
+    "exposure_loss",
     "hdr_tone_map",
     "ldr_loss",
     "noise_even",
@@ -85,6 +86,30 @@ def event_loss(
         at_last = torch.where(settled[:, point], here, at_last)
         started = started | settled[:, point]
     return total / predicted.numel()
+
+
+def exposure_loss(
+    predicted: torch.Tensor, measured: torch.Tensor, settled: torch.Tensor, lone: torch.Tensor
+) -> torch.Tensor:
+    """Squared count error of each lone pixel's whole exposure, first latent point to last.
+
+    The exposure is one span of :func:`event_loss`: pixels not settled at its first or last
+    point are left out, and the sum is over ``R * b`` as that loss's.
+
+    Args:
+        predicted: ``(R, b)`` predicted counts.
+        measured: ``(R, b)`` recorded counts.
+        settled: ``(R, b+1)`` bool, whether each pixel was settled at each latent point.
+        lone: ``(R,)`` bool, the pixels compared over their whole exposure.
+
+    Returns:
+        The sum of the exposures' squared errors over ``R * b``; zero for an empty batch.
+    """
+    if predicted.numel() == 0:
+        return predicted.new_zeros(())
+    whole = lone & settled[:, 0] & settled[:, -1]
+    error = (predicted - measured).sum(dim=1)
+    return torch.where(whole, error, 0.0).square().sum() / predicted.numel()
 
 
 def span_loss(predicted: torch.Tensor, measured: torch.Tensor, known: torch.Tensor) -> torch.Tensor:

@@ -28,6 +28,7 @@ from seenerf.model.variants import VARIANTS, Variant
 from seenerf.train.builder import build_model, resolve_device
 from seenerf.train.losses import (
     event_loss,
+    exposure_loss,
     hdr_tone_map,
     ldr_loss,
     noise_even,
@@ -240,7 +241,9 @@ class RecordingMethod(Method):
         """
         if not self.frames.lone.any() or predictions[-1].counts is None:
             return []
-        error = sum(event_loss(p.counts, batch.bins, batch.exposure_ends) for p in predictions)
+        error = sum(
+            exposure_loss(p.counts, batch.bins, batch.settled, batch.lone) for p in predictions
+        )
         return [LossTerm("exposures", self.preset.event_weight, error)]
 
     def _spans(self, generator: torch.Generator) -> list[LossTerm]:

@@ -85,7 +85,7 @@ def test_lone_frames_are_those_alone_in_their_stretch_of_the_stream():
 
 
 @pytest.mark.parametrize("lone_exposure_spans", [True, False])
-def test_a_lone_frames_batch_marks_its_whole_exposure(lone_exposure_spans):
+def test_a_batch_marks_the_pixels_of_lone_frames(lone_exposure_spans):
     import dataclasses
 
     import torch
@@ -104,9 +104,7 @@ def test_a_lone_frames_batch_marks_its_whole_exposure(lone_exposure_spans):
     sampler = FrameSampler(data, np.arange(3), lone_exposure_spans=lone_exposure_spans)
     batch = sampler.batch(torch.tensor([2, 1, 2]), torch.tensor([0, 2 * 10 + 2, 2 * 10 + 2]))
     assert batch.settled.tolist() == [[True] * 4, [True] * 4, [True, True, True, False]]
-    # Frame 2's pixel at (2, 2) had not settled at the end: its exposure makes no span.
-    whole = [[True, False, False, True], [False] * 4, [True, False, False, False]]
-    assert batch.exposure_ends.tolist() == (whole if lone_exposure_spans else [[False] * 4] * 3)
+    assert batch.lone.tolist() == ([True, False, True] if lone_exposure_spans else [False] * 3)
 
 
 def test_settled_points_must_match_the_bins():

@@ -10,7 +10,7 @@ from seenerf.model.config import FitConfig
 from seenerf.model.presets import PRESETS
 from seenerf.model.variants import VARIANTS
 from seenerf.train.builder import size_field
-from seenerf.train.losses import NOISE_REFERENCE, event_loss, noise_even
+from seenerf.train.losses import NOISE_REFERENCE, event_loss, exposure_loss, noise_even
 from seenerf.train.methods import frame_scale, make_method
 from seenerf.train.trainer import Trainer
 
@@ -110,6 +110,18 @@ def test_event_loss_compares_counts_between_settled_points(settled, expected):
     measured = torch.tensor([[1.0, 1.0, 4.0, 4.0]])
     loss = event_loss(predicted, measured, torch.tensor([settled], dtype=torch.bool))
     assert float(loss) == pytest.approx(expected)
+
+
+def test_exposure_loss_compares_each_lone_pixels_whole_exposure():
+    predicted = torch.tensor([[1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0]])
+    measured = torch.tensor([[4.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    settled = torch.ones((4, 4), dtype=torch.bool)
+    settled[2, 3] = False  # row 2 had not settled at the exposure's end: no span
+    lone = torch.tensor([True, True, True, False])  # row 3 is not lone
+    # Row 0's bins err by -3, 2, 3 but its exposure by 2; row 1's by 6: (4 + 36) / 12.
+    loss = exposure_loss(predicted, measured, settled, lone)
+    assert float(loss) == pytest.approx(40 / 12)
+    assert float(exposure_loss(predicted[:0], measured[:0], settled[:0], lone[:0])) == 0.0
 
 
 def test_noise_even_scale_evens_shot_and_read_noise():
