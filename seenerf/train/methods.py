@@ -203,6 +203,7 @@ class RecordingMethod(Method):
         calibrated = events is not None and events.calibrated
         spans = calibrated and data.lead is not None
         self.spans = round(config.data.span_share * preset.pixels_per_step) if spans else 0
+        self.lone_exposures = config.data.lone_exposure_spans and bool(data.lone_frames.any())
 
     def step(self, generator: torch.Generator) -> Step:
         """The loss terms of a batch of recorded pixels."""
@@ -239,7 +240,7 @@ class RecordingMethod(Method):
         Bin by bin, a lone frame's events ask the field for each edge's crossing within a bin
         its poses cannot place that finely; over the whole exposure, for the change alone.
         """
-        if not self.frames.lone.any() or predictions[-1].counts is None:
+        if not self.lone_exposures or predictions[-1].counts is None:
             return []
         error = sum(
             exposure_loss(p.counts, batch.bins, batch.settled, batch.lone) for p in predictions
