@@ -33,6 +33,8 @@ __all__ = [
 
 CALIBRATION_PATH = "/calibration"
 _ARRAYS = ("response_value", "response_log_exposure", "pixel_factor_on", "pixel_factor_off")
+_THRESHOLD_VALUES = ("thresholds", "threshold_scale", "pixel_factors")
+"""The assumed values a stated threshold replaces."""
 
 
 @dataclass(frozen=True)
@@ -127,6 +129,9 @@ class SensorCalibration:
             pixel_factor_on=np.ones((0, 0)),
             pixel_factor_off=np.ones((0, 0)),
             source="given",
+            assumed={
+                name: why for name, why in self.assumed.items() if name not in _THRESHOLD_VALUES
+            },
         )
 
     def facts(self) -> dict:

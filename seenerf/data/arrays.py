@@ -16,7 +16,10 @@ import numpy as np
 from davis_io.session import ColorFilter, filter_weights
 from seenerf.errors import TrainingDataError
 
-__all__ = ["TestViews", "TrainTruth", "TrainingData", "pixel_layout"]
+__all__ = ["CLIP_MARGIN", "TestViews", "TrainTruth", "TrainingData", "pixel_layout"]
+
+CLIP_MARGIN = 0.02
+"""Frame values this close below the frames' clip level count as clipped."""
 
 
 def pixel_layout(
@@ -106,8 +109,12 @@ class TrainingData:
         cutoff_hz: the photoreceptor cut-off the calibration knows, or 0 (the config's then).
         dead_time_s: the pixels' measured dead time, or 0 when none was measured.
         polarity_scale: the calibrated ON and OFF thresholds over ``threshold``.
+        thresholds_measured: the thresholds were measured or stated (False: the calibration
+            could not measure them and the nominal ones stand in).
         linear_levels: ``(black, saturation)`` normalised, when the calibration measured frames
             linear in exposure (a raw DAVIS frame); None otherwise.
+        clip_level: normalised value where the frames clip (the calibration's; 1 where they
+            never pile up at a top value).
         noise_offset: for linear frames whose noise was measured, the value above black where
             their shot noise equals their read noise (normalised); 0 otherwise.
         test: held-out views with truth, if any.
@@ -132,7 +139,9 @@ class TrainingData:
     cutoff_hz: float = 0.0
     dead_time_s: float = 0.0
     polarity_scale: tuple[float, float] = (1.0, 1.0)
+    thresholds_measured: bool = True
     linear_levels: tuple[float, float] | None = None
+    clip_level: float = 1.0
     noise_offset: float = 0.0
     distortion: np.ndarray = field(default_factory=lambda: np.zeros(0, np.float32))
     test: TestViews | None = None
@@ -160,6 +169,13 @@ class TrainingData:
             return np.zeros(self.num_frames, bool)
         _, which, members = np.unique(self.stretch, return_inverse=True, return_counts=True)
         return members[which] == 1
+
+    def clipped(self, values):
+        """Whether each frame value (array or tensor) is at the clip level or above.
+
+        Values within :data:`CLIP_MARGIN` below it count as clipped.
+        """
+        return values >= self.clip_level - CLIP_MARGIN
 
     @property
     def image_size(self) -> tuple[int, int]:

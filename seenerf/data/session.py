@@ -122,9 +122,11 @@ def load_training_data(
                 calibration.threshold_on / calibration.threshold,
                 calibration.threshold_off / calibration.threshold,
             ),
+            thresholds_measured=calibration.thresholds_measured,
             linear_levels=(calibration.black_level, calibration.saturation)
             if calibration.response_linear
             else None,
+            clip_level=calibration.saturation,
             noise_offset=calibration.noise_offset if calibration.response_linear else 0.0,
         )
         truth = session.truth()

@@ -102,6 +102,8 @@ def resolved_settings(method: Method) -> dict:
         "box": {"low": renderer.box.low, "high": renderer.box.high},
         "space": "ndc" if renderer.space is not None else "world",
         "event_weight": preset.event_weight,
+        "clipped_event_factor": preset.clipped_event_factor,
+        "clip_level": data.clip_level,
         "event_threshold": data.threshold,
         "event_cutoff_hz": data.cutoff_hz or method.config.sensor.cutoff_hz,
         "event_dead_time_s": model.event_crf.dead_time_s if model.event_crf is not None else 0.0,
@@ -154,6 +156,9 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
             "their events are compared over the whole exposure as well as bin by bin "
             "(--no-lone-exposure-spans: bin by bin alone)"
         )
+    clipped = _clipped_events(method)
+    if clipped:
+        log(clipped)
     if isinstance(method.model.crf, LinearCrf):
         crf = method.model.crf
         log(
@@ -198,6 +203,20 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
         except (SeecapError, OSError) as error:  # the renders and scores stand without it
             log(f"report.html not written ({error}); `seecap report {run_dir}` retries")
     return FitResult(run_dir, summary, metrics)
+
+
+def _clipped_events(method: Method) -> str:
+    """What the fit does with the events of clipped pixels, one line ('' where nothing)."""
+    data, factor = method.data, method.preset.clipped_event_factor
+    if factor == 1.0 or method.model.event_crf is None:
+        return ""
+    share = float(np.mean(data.clipped(data.ldr)))
+    if share == 0:
+        return ""
+    clipped = f"{share:.1%} of the frames' pixels clipped (at {data.clip_level:.3f}): "
+    if not data.thresholds_measured:
+        return clipped + "their events weigh as the others', as the thresholds are assumed"
+    return clipped + f"their events weigh {factor:g}x, the light above the clip level theirs alone"
 
 
 def _refined_poses(data: TrainingData, model, log: Callable[[str], None]) -> tuple:

@@ -55,7 +55,10 @@ def noise_even(values: torch.Tensor, black: float, offset: float) -> torch.Tenso
 
 
 def event_loss(
-    predicted: torch.Tensor, measured: torch.Tensor, settled: torch.Tensor
+    predicted: torch.Tensor,
+    measured: torch.Tensor,
+    settled: torch.Tensor,
+    weights: torch.Tensor | None = None,
 ) -> torch.Tensor:
     """Squared count error over the spans between a pixel's settled latent points (eq. 14).
 
@@ -69,27 +72,32 @@ def event_loss(
         predicted: ``(R, b)`` predicted counts.
         measured: ``(R, b)`` recorded counts.
         settled: ``(R, b+1)`` bool, whether each pixel was settled at each latent point.
+        weights: ``(R,)`` each pixel's weight on its spans' squared errors (None: all 1).
 
     Returns:
-        The sum of the spans' squared errors over ``R * b``; zero for an empty batch.
+        The weighted sum of the spans' squared errors over ``R * b``; zero for an empty batch.
     """
     if predicted.numel() == 0:
         return predicted.new_zeros(())
     residual = torch.cumsum(predicted - measured, dim=1)
     at_last = torch.zeros_like(residual[:, 0])
     started = settled[:, 0]
-    total = predicted.new_zeros(())
+    total = torch.zeros_like(at_last)
     for point in range(1, settled.shape[1]):
         here = residual[:, point - 1]
         ends = started & settled[:, point]
-        total = total + torch.where(ends, here - at_last, 0.0).square().sum()
+        total = total + torch.where(ends, here - at_last, 0.0).square()
         at_last = torch.where(settled[:, point], here, at_last)
         started = started | settled[:, point]
-    return total / predicted.numel()
+    return _weighted_sum(total, weights) / predicted.numel()
 
 
 def exposure_loss(
-    predicted: torch.Tensor, measured: torch.Tensor, settled: torch.Tensor, lone: torch.Tensor
+    predicted: torch.Tensor,
+    measured: torch.Tensor,
+    settled: torch.Tensor,
+    lone: torch.Tensor,
+    weights: torch.Tensor | None = None,
 ) -> torch.Tensor:
     """Squared count error of each lone pixel's whole exposure, first latent point to last.
 
@@ -101,15 +109,22 @@ def exposure_loss(
         measured: ``(R, b)`` recorded counts.
         settled: ``(R, b+1)`` bool, whether each pixel was settled at each latent point.
         lone: ``(R,)`` bool, the pixels compared over their whole exposure.
+        weights: ``(R,)`` each pixel's weight on its squared error (None: all 1).
 
     Returns:
-        The sum of the exposures' squared errors over ``R * b``; zero for an empty batch.
+        The weighted sum of the exposures' squared errors over ``R * b``; zero for an empty
+        batch.
     """
     if predicted.numel() == 0:
         return predicted.new_zeros(())
     whole = lone & settled[:, 0] & settled[:, -1]
     error = (predicted - measured).sum(dim=1)
-    return torch.where(whole, error, 0.0).square().sum() / predicted.numel()
+    return _weighted_sum(torch.where(whole, error, 0.0).square(), weights) / predicted.numel()
+
+
+def _weighted_sum(values: torch.Tensor, weights: torch.Tensor | None) -> torch.Tensor:
+    """The sum of ``values``, each times its weight where weights are given."""
+    return values.sum() if weights is None else torch.dot(values, weights)
 
 
 def span_loss(predicted: torch.Tensor, measured: torch.Tensor, known: torch.Tensor) -> torch.Tensor:

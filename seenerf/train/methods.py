@@ -159,8 +159,8 @@ class Method:
 class RecordingMethod(Method):
     """Trains on the recorded blurry frames and their events, at the estimated poses.
 
-    The terms: the frames' LDR error (eq. 15), the events' (weighted by the preset's lambda),
-    lone frames' whole exposures' (weighted as the events),
+    The terms: the frames' LDR error (eq. 15), the events' (weighted by the preset's lambda,
+    the more where a frame clipped), lone frames' whole exposures' (weighted as the events),
     the spans' between frames (weighted as the events), the response's anchor, the field's
     smoothness, and the prior of refined poses.
     """
@@ -211,10 +211,11 @@ class RecordingMethod(Method):
         batch = self.frames.sample(self.preset.pixels_per_step, generator)
         predictions = model(batch, generator)
         recorded = self.scale(batch.ldr)
+        weights = self.event_weights(batch)
         ldr = sum(ldr_loss(self.scale(p.ldr), recorded) for p in predictions)
         events = sum(
             (
-                event_loss(p.counts, batch.bins, batch.settled)
+                event_loss(p.counts, batch.bins, batch.settled, weights)
                 for p in predictions
                 if p.counts is not None
             ),
@@ -224,7 +225,7 @@ class RecordingMethod(Method):
         terms = [
             LossTerm("ldr", 1.0, ldr),
             LossTerm("events", self.preset.event_weight, events),
-            *self._exposures(predictions, batch),
+            *self._exposures(predictions, batch, weights),
             *self._spans(generator),
             LossTerm("anchor", self.config.sensor.anchor_weight, anchor),
             *self._smoothness(),
@@ -234,7 +235,18 @@ class RecordingMethod(Method):
         rays = batch.origins.shape[0] * batch.origins.shape[1] + 2 * self.spans
         return Step(terms, rays, predictions[-1].num_samples)
 
-    def _exposures(self, predictions, batch) -> list[LossTerm]:
+    def event_weights(self, batch) -> torch.Tensor | None:
+        """Each pixel's weight on its events: the preset's factor where its frame clipped.
+
+        Only where the thresholds were measured: nothing else checks a clipped pixel's events,
+        so they would carry a nominal threshold's error (± 50 %) into the light unchecked.
+        """
+        factor = self.preset.clipped_event_factor
+        if factor == 1.0 or not self.data.thresholds_measured:
+            return None
+        return torch.where(self.data.clipped(batch.ldr), factor, 1.0)
+
+    def _exposures(self, predictions, batch, weights) -> list[LossTerm]:
         """The whole exposures' term, where the session has lone frames and the variant events.
 
         Bin by bin, a lone frame's events ask the field for each edge's crossing within a bin
@@ -243,7 +255,8 @@ class RecordingMethod(Method):
         if not self.lone_exposures or predictions[-1].counts is None:
             return []
         error = sum(
-            exposure_loss(p.counts, batch.bins, batch.settled, batch.lone) for p in predictions
+            exposure_loss(p.counts, batch.bins, batch.settled, batch.lone, weights)
+            for p in predictions
         )
         return [LossTerm("exposures", self.preset.event_weight, error)]
 

@@ -112,6 +112,16 @@ def test_event_loss_compares_counts_between_settled_points(settled, expected):
     assert float(loss) == pytest.approx(expected)
 
 
+def test_event_loss_weighs_each_pixels_spans_by_its_weight():
+    predicted = torch.tensor([[1.0, 2.0], [0.0, 3.0]])
+    measured = torch.tensor([[0.0, 0.0], [0.0, 0.0]])
+    settled = torch.ones((2, 3), dtype=torch.bool)
+    # Squared errors 1 + 4 (row 0) and 0 + 9 (row 1), weighted 2 and 0.5: (10 + 4.5) / 4.
+    loss = event_loss(predicted, measured, settled, torch.tensor([2.0, 0.5]))
+    assert float(loss) == pytest.approx(14.5 / 4)
+    assert float(event_loss(predicted, measured, settled)) == pytest.approx(14 / 4)
+
+
 def test_exposure_loss_compares_each_lone_pixels_whole_exposure():
     predicted = torch.tensor([[1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0]])
     measured = torch.tensor([[4.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
@@ -121,6 +131,8 @@ def test_exposure_loss_compares_each_lone_pixels_whole_exposure():
     # Row 0's bins err by -3, 2, 3 but its exposure by 2; row 1's by 6: (4 + 36) / 12.
     loss = exposure_loss(predicted, measured, settled, lone)
     assert float(loss) == pytest.approx(40 / 12)
+    weighted = exposure_loss(predicted, measured, settled, lone, torch.tensor([3.0, 0.5, 1, 1]))
+    assert float(weighted) == pytest.approx((3 * 4 + 0.5 * 36) / 12)
     assert float(exposure_loss(predicted[:0], measured[:0], settled[:0], lone[:0])) == 0.0
 
 
@@ -154,6 +166,25 @@ def test_linear_frames_of_measured_noise_are_compared_on_the_noise_even_scale():
     assert frame_scale(scene, _config(frame_noise=False))(values) is values
     scene.noise_offset = 0.0  # noise not measured
     assert frame_scale(scene, _config())(values) is values
+
+
+@pytest.mark.parametrize(
+    ("preset", "measured", "factor"),
+    [("fast", True, 5.0), ("paper", True, None), ("fast", False, None)],
+)
+def test_events_weigh_more_where_their_frame_clipped(preset, measured, factor):
+    scene = plane_scene(height=8, width=10, frames=2, b=2, test_views=0)
+    scene.clip_level, scene.thresholds_measured = 0.8, measured
+    scene.ldr[0, 0] = 0.79  # within the margin below the clip level: clipped
+    scene.ldr[0, 1] = 0.75  # below it: not
+    method = make_method(scene, _config(preset=preset))
+    batch = method.frames.batch(torch.zeros(20, dtype=torch.long), torch.arange(20))
+    weights = method.event_weights(batch)
+    if factor is None:
+        assert weights is None  # one weight everywhere: as published, or thresholds assumed
+    else:
+        expected = torch.tensor([factor] * 10 + [1.0] * 10)
+        torch.testing.assert_close(weights, expected)
 
 
 @pytest.mark.parametrize(

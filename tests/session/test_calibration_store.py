@@ -1,5 +1,6 @@
 """The sensor calibration is stored in ``/calibration`` and read back whole."""
 
+import dataclasses
 import json
 
 import h5py
@@ -70,3 +71,17 @@ def test_the_summary_states_the_frame_noise_only_when_measured():
     # 4.5e-7 / 1.5e-4 = 0.0030 above black: shot noise as large as read noise there.
     assert "read noise 0.0030 above black" in MEASURED.summary()
     assert "frame noise" not in SensorCalibration(0.3, 0.3).summary()
+
+
+def test_a_stated_threshold_replaces_the_assumed_thresholds_and_nothing_else():
+    assumed = {
+        "thresholds": "at the search's bound",
+        "pixel_factors": "never moved",
+        "latency_us": "flat profile",
+    }
+    calibration = dataclasses.replace(MEASURED, assumed=assumed)
+    assert not calibration.thresholds_measured
+    stated = calibration.with_threshold(0.25)
+    assert stated.thresholds_measured
+    assert stated.assumed == {"latency_us": "flat profile"}
+    assert (stated.threshold_on, stated.threshold_off, stated.source) == (0.25, 0.25, "given")
