@@ -27,7 +27,14 @@ from seenerf.train.builder import with_refined_poses
 from seenerf.train.methods import Method, make_method
 from seenerf.train.trainer import Trainer, TrainSummary
 
-__all__ = ["FitResult", "LogBook", "fit_data", "resolved_settings", "start_over"]
+__all__ = [
+    "FitResult",
+    "LogBook",
+    "clipped_events_note",
+    "fit_data",
+    "resolved_settings",
+    "start_over",
+]
 
 
 @dataclass
@@ -156,7 +163,7 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
             "their events are compared over the whole exposure as well as bin by bin "
             "(--no-lone-exposure-spans: bin by bin alone)"
         )
-    clipped = _clipped_events(method)
+    clipped = clipped_events_note(method)
     if clipped:
         log(clipped)
     if isinstance(method.model.crf, LinearCrf):
@@ -205,7 +212,7 @@ def _fit(data, config, run_dir, fresh, log, spent_s, on_step) -> FitResult:
     return FitResult(run_dir, summary, metrics)
 
 
-def _clipped_events(method: Method) -> str:
+def clipped_events_note(method: Method) -> str:
     """What the fit does with the events of clipped pixels, one line ('' where nothing)."""
     data, factor = method.data, method.preset.clipped_event_factor
     if factor == 1.0 or method.model.event_crf is None:

@@ -10,6 +10,7 @@ from seenerf.model.config import FitConfig
 from seenerf.model.presets import PRESETS
 from seenerf.model.variants import VARIANTS
 from seenerf.train.builder import size_field
+from seenerf.train.fit import clipped_events_note
 from seenerf.train.losses import NOISE_REFERENCE, event_loss, exposure_loss, noise_even
 from seenerf.train.methods import frame_scale, make_method
 from seenerf.train.trainer import Trainer
@@ -185,6 +186,18 @@ def test_events_weigh_more_where_their_frame_clipped(preset, measured, factor):
     else:
         expected = torch.tensor([factor] * 10 + [1.0] * 10)
         torch.testing.assert_close(weights, expected)
+
+
+def test_the_fit_says_what_it_does_with_the_events_of_clipped_pixels():
+    scene = plane_scene(height=8, width=10, frames=2, b=2, test_views=0)
+    scene.clip_level, scene.ldr[:] = 0.8, 0.5
+    scene.ldr[0, :2] = 0.8  # 20 of 160 values
+    note = clipped_events_note(make_method(scene, _config()))
+    assert note.startswith("12.5% of the frames' pixels clipped (at 0.800): their events weigh 5x")
+    scene.thresholds_measured = False
+    assert "weigh as the others'" in clipped_events_note(make_method(scene, _config()))
+    scene.ldr[:] = 0.5
+    assert clipped_events_note(make_method(scene, _config())) == ""
 
 
 @pytest.mark.parametrize(
