@@ -29,8 +29,13 @@ WAYS = {"local": ["--threads", str(FIT_THREADS)], "ray": ["--ray", "local"]}
 
 
 def _run(way: str, out: Path) -> dict:
-    """The quick plan one way, in a child process; its wall time and every rung's scores."""
-    arguments = ["tools/bench.py", "--quick", "--no-capture", "--fresh", "--out", str(out / way)]
+    """The quick plan one way, in a child process; its wall time and every rung's scores.
+
+    The child runs in the repository, so a folder inside it is given (and reported) relative to it.
+    """
+    folder = out / way
+    shown = folder.relative_to(ROOT) if folder.is_relative_to(ROOT) else folder
+    arguments = ["tools/bench.py", "--quick", "--no-capture", "--fresh", "--out", str(shown)]
     command = [*arguments, *WAYS[way]]
     start = time.monotonic()
     with open(out / f"{way}.log", "wb") as log:
