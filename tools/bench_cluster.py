@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 from benchlib.cluster import FIT_THREADS
-from benchlib.machine import run_header
+from benchlib.machine import exact_command, run_header
 from benchlib.publish import keep_report, report_folder, report_parser
 from benchlib.side_by_side import ROW_FIELDS, side_by_side_report
 
@@ -29,13 +29,8 @@ WAYS = {"local": ["--threads", str(FIT_THREADS)], "ray": ["--ray", "local"]}
 
 
 def _run(way: str, out: Path) -> dict:
-    """The quick plan one way, in a child process; its wall time and every rung's scores.
-
-    The child runs in the repository, so a folder inside it is given (and reported) relative to it.
-    """
-    folder = out / way
-    shown = folder.relative_to(ROOT) if folder.is_relative_to(ROOT) else folder
-    arguments = ["tools/bench.py", "--quick", "--no-capture", "--fresh", "--out", str(shown)]
+    """The quick plan one way, in a child process; its wall time and every rung's scores."""
+    arguments = ["tools/bench.py", "--quick", "--no-capture", "--fresh", "--out", str(out / way)]
     command = [*arguments, *WAYS[way]]
     start = time.monotonic()
     with open(out / f"{way}.log", "wb") as log:
@@ -51,7 +46,7 @@ def _run(way: str, out: Path) -> dict:
         for row in results["rows"]
     ]
     return {
-        "command": " ".join(command),
+        "command": exact_command(command),
         "returncode": done.returncode,
         "wall_s": wall_s,
         "rows": rows,
