@@ -143,6 +143,7 @@ class FrameSampler:
             self.mix[pixel],
             level[:, 1] - level[:, 0],
             settled.all(dim=1),
+            self.ldr[frame, v, u],
         )
 
     def batch_flat(self, flat: torch.Tensor) -> RayBatch:

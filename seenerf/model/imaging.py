@@ -75,6 +75,7 @@ class SpanBatch:
             the mean threshold.
         known: ``(R,)`` bool, the change is whole: both points in one stretch, the pixel settled
             at each.
+        ldr: ``(R, 2)`` the pixel's recorded value in the first point's frame and the last's.
     """
 
     origins: torch.Tensor
@@ -82,6 +83,7 @@ class SpanBatch:
     mix: torch.Tensor
     change: torch.Tensor
     known: torch.Tensor
+    ldr: torch.Tensor
 
 
 def _scaled_ldr(

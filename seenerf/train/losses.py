@@ -127,16 +127,28 @@ def _weighted_sum(values: torch.Tensor, weights: torch.Tensor | None) -> torch.T
     return values.sum() if weights is None else torch.dot(values, weights)
 
 
-def span_loss(predicted: torch.Tensor, measured: torch.Tensor, known: torch.Tensor) -> torch.Tensor:
+def span_loss(
+    predicted: torch.Tensor,
+    measured: torch.Tensor,
+    known: torch.Tensor,
+    weights: torch.Tensor | None = None,
+) -> torch.Tensor:
     """Robust mean error of the spans' changes, in thresholds, over the spans of known change.
 
     A span's error counts as its square within :data:`SPAN_ROBUST` thresholds and grows linearly
-    beyond (Huber's loss, doubled); zero where no span's change is known.
+    beyond (Huber's loss, doubled), times its weight; zero where no span's change is known.
+
+    Args:
+        predicted: ``(R,)`` predicted changes.
+        measured: ``(R,)`` the recorded ones.
+        known: ``(R,)`` bool, the spans whose change is whole.
+        weights: ``(R,)`` each span's weight on its error (None: all 1).
     """
     residual = torch.where(known, predicted - measured, 0.0)
-    target = torch.zeros_like(residual)
-    error = F.huber_loss(residual, target, reduction="sum", delta=SPAN_ROBUST)
-    return 2 * error / known.sum().clamp(min=1)
+    error = F.huber_loss(residual, torch.zeros_like(residual), reduction="none", delta=SPAN_ROBUST)
+    if weights is not None:
+        error = error * weights
+    return 2 * error.sum() / known.sum().clamp(min=1)
 
 
 def hdr_tone_map(hdr: torch.Tensor, scale: torch.Tensor | float) -> torch.Tensor:

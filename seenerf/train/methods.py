@@ -160,9 +160,9 @@ class RecordingMethod(Method):
     """Trains on the recorded blurry frames and their events, at the estimated poses.
 
     The terms: the frames' LDR error (eq. 15), the events' (weighted by the preset's lambda,
-    the more where a frame clipped), lone frames' whole exposures' (weighted as the events),
-    the spans' between frames (weighted as the events), the response's anchor, the field's
-    smoothness, and the prior of refined poses.
+    the more where a frame clipped), lone frames' whole exposures' and the spans' between
+    frames (each weighted as the events, the more where a frame clipped), the response's
+    anchor, the field's smoothness, and the prior of refined poses.
     """
 
     @classmethod
@@ -211,7 +211,7 @@ class RecordingMethod(Method):
         batch = self.frames.sample(self.preset.pixels_per_step, generator)
         predictions = model(batch, generator)
         recorded = self.scale(batch.ldr)
-        weights = self.event_weights(batch)
+        weights = self.event_weights(batch.ldr)
         ldr = sum(ldr_loss(self.scale(p.ldr), recorded) for p in predictions)
         events = sum(
             (
@@ -235,8 +235,11 @@ class RecordingMethod(Method):
         rays = batch.origins.shape[0] * batch.origins.shape[1] + 2 * self.spans
         return Step(terms, rays, predictions[-1].num_samples)
 
-    def event_weights(self, batch) -> torch.Tensor | None:
+    def event_weights(self, ldr: torch.Tensor) -> torch.Tensor | None:
         """Each pixel's weight on its events: the preset's factor where its frame clipped.
+
+        ``ldr`` holds the pixels' recorded values, ``(R,)``, or ``(R, k)`` for events that
+        span k frames (a span between two): the factor where any of them clipped.
 
         Only where the thresholds were measured: nothing else checks a clipped pixel's events,
         so they would carry a nominal threshold's error (± 50 %) into the light unchecked.
@@ -244,7 +247,8 @@ class RecordingMethod(Method):
         factor = self.preset.clipped_event_factor
         if factor == 1.0 or not self.data.thresholds_measured:
             return None
-        return torch.where(self.data.clipped(batch.ldr), factor, 1.0)
+        clipped = self.data.clipped(ldr).reshape(len(ldr), -1).any(dim=1)
+        return torch.where(clipped, factor, 1.0)
 
     def _exposures(self, predictions, batch, weights) -> list[LossTerm]:
         """The whole exposures' term, where the session has lone frames and the variant events.
@@ -266,7 +270,8 @@ class RecordingMethod(Method):
             return []
         spans = self.frames.spans(self.spans, self.config.data.span_reach, generator)
         changes = self.model.span_changes(spans, generator)
-        error = sum(span_loss(change, spans.change, spans.known) for change in changes)
+        weights = self.event_weights(spans.ldr)
+        error = sum(span_loss(change, spans.change, spans.known, weights) for change in changes)
         return [LossTerm("spans", self.preset.event_weight, error)]
 
     @torch.no_grad()

@@ -156,3 +156,6 @@ def test_span_loss_counts_known_spans_only_and_large_errors_linearly():
     # squared within one threshold, then linear: 2 * 3 - 1 for the second
     assert float(span_loss(predicted, measured, known)) == pytest.approx((0.25 + 5) / 2)
     assert float(span_loss(predicted, measured, torch.zeros(3, dtype=torch.bool))) == 0.0
+    # weighed: the second span five times, the unknown third's weight changes nothing
+    weights = torch.tensor([1.0, 5.0, 7.0])
+    assert float(span_loss(predicted, measured, known, weights)) == pytest.approx((0.25 + 25) / 2)

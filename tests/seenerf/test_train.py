@@ -180,12 +180,15 @@ def test_events_weigh_more_where_their_frame_clipped(preset, measured, factor):
     scene.ldr[0, 1] = 0.75  # below it: not
     method = make_method(scene, _config(preset=preset))
     batch = method.frames.batch(torch.zeros(20, dtype=torch.long), torch.arange(20))
-    weights = method.event_weights(batch)
+    weights = method.event_weights(batch.ldr)
+    # a span's events weigh the factor where either of its frames clipped
+    spans = method.event_weights(torch.tensor([[0.5, 0.79], [0.75, 0.5], [0.81, 0.79]]))
     if factor is None:
-        assert weights is None  # one weight everywhere: as published, or thresholds assumed
+        assert weights is None and spans is None  # as published, or thresholds assumed
     else:
         expected = torch.tensor([factor] * 10 + [1.0] * 10)
         torch.testing.assert_close(weights, expected)
+        torch.testing.assert_close(spans, torch.tensor([factor, 1.0, factor]))
 
 
 def test_the_fit_says_what_it_does_with_the_events_of_clipped_pixels():
