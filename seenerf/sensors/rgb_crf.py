@@ -121,6 +121,9 @@ class RgbCrf(nn.Module):
         seed: initialisation seed.
     """
 
+    clips_hard = False
+    """Its curve flattens smoothly: a clipped frame still tells the field how far above it is."""
+
     def __init__(
         self,
         hidden: int = 128,
@@ -170,6 +173,8 @@ class MonotoneCrf(nn.Module):
     SPAN = 9.0
     """The knots lie this far below and above the anchor, in ln exposure (e^9: about 8,100)."""
 
+    clips_hard = False
+
     def __init__(self, anchor_log_exposure: float = 0.0, anchor_value: float = 0.5):
         super().__init__()
         unit_slope = math.log(math.e - 1.0)  # softplus of it is 1
@@ -197,6 +202,8 @@ class MonotoneCrf(nn.Module):
 
 class PowerCrf(nn.Module):
     """Module form of :func:`apply_power_crf`; the exponent starts at 1/2.2."""
+
+    clips_hard = False
 
     def __init__(self, anchor_log_exposure: float = 0.0, anchor_value: float = 0.5):
         super().__init__()
@@ -228,6 +235,9 @@ class LinearCrf(nn.Module):
         anchor_log_exposure: ln(radiance x seconds) of the anchor point.
         anchor_value: LDR value at the anchor point.
     """
+
+    clips_hard = True
+    """No gradient above saturation: the light above the clip level is the events' alone."""
 
     def __init__(
         self,
@@ -281,6 +291,10 @@ class TabulatedCrf(nn.Module):
         self.register_buffer(
             "table_values", torch.as_tensor(values, dtype=torch.float32), persistent=False
         )
+        top = self.table_values.amax(dim=0)
+        # A raw sensor's table reaches its clip level and stays there; a film-like one only
+        # approaches its top at the table's end.
+        self.clips_hard = bool((self.table_values[:-1] >= top - 1e-6).any())
 
     def forward(self, log_exposure: torch.Tensor) -> torch.Tensor:
         """See :func:`interpolate_response`."""

@@ -223,6 +223,8 @@ def clipped_events_note(method: Method) -> str:
     clipped = f"{share:.1%} of the frames' pixels clipped (at {data.clip_level:.3f}): "
     if not data.thresholds_measured:
         return clipped + "their events weigh as the others', as the thresholds are assumed"
+    if not method.clips_hard:
+        return clipped + "their events weigh as the others', the response telling how far above"
     return clipped + f"their events weigh {factor:g}x, the light above the clip level theirs alone"
 
 

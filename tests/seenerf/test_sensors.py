@@ -61,6 +61,12 @@ def test_tabulated_crf_interpolates_each_channel_and_holds_its_ends():
     # the way from 0.4 to 0.8.
     assert crf(u).tolist() == [pytest.approx([0.25, 0.6, 0.8]), pytest.approx([0.0, 0.3, 0.5])]
     assert crf.anchor_loss() == 0 and not list(crf.parameters())
+    assert not crf.clips_hard  # each channel reaches its top only at the table's end
+
+
+def test_a_tabulated_response_that_stays_at_its_top_clips_hard():
+    flat_top = [[0.0, 0.1, 0.2], [0.9, 0.3, 0.4], [0.9, 0.9, 0.8]]  # channel 0 flat from x = 0
+    assert TabulatedCrf([-1.0, 0.0, 2.0], flat_top).clips_hard
 
 
 def test_linear_crf_hand_values_and_no_gradient_where_it_clips():
@@ -71,7 +77,7 @@ def test_linear_crf_hand_values_and_no_gradient_where_it_clips():
     assert out[0].tolist() == pytest.approx([0.5, 0.275, 0.9])
     out.sum().backward()
     assert u.grad[0].tolist() == pytest.approx([0.45, 0.225, 0.0])  # d/d ln x = 0.45 x
-    assert crf.anchor_loss() == 0 and not list(crf.parameters())
+    assert crf.anchor_loss() == 0 and not list(crf.parameters()) and crf.clips_hard
     with pytest.raises(ConfigError, match="--response learned"):
         LinearCrf(0.6, 0.9)
 

@@ -170,12 +170,18 @@ def test_linear_frames_of_measured_noise_are_compared_on_the_noise_even_scale():
 
 
 @pytest.mark.parametrize(
-    ("preset", "measured", "factor"),
-    [("fast", True, 5.0), ("paper", True, None), ("fast", False, None)],
+    ("preset", "measured", "linear", "factor"),
+    [
+        ("fast", True, True, 5.0),
+        ("paper", True, True, None),  # as published
+        ("fast", False, True, None),  # thresholds assumed
+        ("fast", True, False, None),  # a learned response says how far above its clip level
+    ],
 )
-def test_events_weigh_more_where_their_frame_clipped(preset, measured, factor):
+def test_events_weigh_more_where_their_frame_clipped(preset, measured, linear, factor):
     scene = plane_scene(height=8, width=10, frames=2, b=2, test_views=0)
     scene.clip_level, scene.thresholds_measured = 0.8, measured
+    scene.linear_levels = (0.02, 0.8) if linear else None
     scene.ldr[0, 0] = 0.79  # within the margin below the clip level: clipped
     scene.ldr[0, 1] = 0.75  # below it: not
     method = make_method(scene, _config(preset=preset))
@@ -184,7 +190,7 @@ def test_events_weigh_more_where_their_frame_clipped(preset, measured, factor):
     # a span's events weigh the factor where either of its frames clipped
     spans = method.event_weights(torch.tensor([[0.5, 0.79], [0.75, 0.5], [0.81, 0.79]]))
     if factor is None:
-        assert weights is None and spans is None  # as published, or thresholds assumed
+        assert weights is None and spans is None
     else:
         expected = torch.tensor([factor] * 10 + [1.0] * 10)
         torch.testing.assert_close(weights, expected)
@@ -195,6 +201,9 @@ def test_the_fit_says_what_it_does_with_the_events_of_clipped_pixels():
     scene = plane_scene(height=8, width=10, frames=2, b=2, test_views=0)
     scene.clip_level, scene.ldr[:] = 0.8, 0.5
     scene.ldr[0, :2] = 0.8  # 20 of 160 values
+    note = clipped_events_note(make_method(scene, _config()))
+    assert note.endswith("their events weigh as the others', the response telling how far above")
+    scene.linear_levels = (0.02, 0.8)
     note = clipped_events_note(make_method(scene, _config()))
     assert note.startswith("12.5% of the frames' pixels clipped (at 0.800): their events weigh 5x")
     scene.thresholds_measured = False
