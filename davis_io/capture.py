@@ -12,7 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from davis_io.chips import DEFAULT_FRAME_GAP_US
+from davis_io.chips import COLOUR_MODELS, DEFAULT_FRAME_GAP_US, SENSOR_SIZES
 from davis_io.errors import DeviceError, UsageError
 from davis_io.session.recorder import RecordingResult, record
 from davis_io.types import ColorFilter, PacketSource
@@ -58,6 +58,8 @@ class CaptureRequest:
         exposure_steps: the emulator's auto exposure, each frame a share of the exposure in
             turn (empty: every frame the exposure).
         lens: the emulator's lens: ``pinhole``, ``random`` or OpenCV's ``k1,k2,p1,p2[,k3]``.
+        model: the emulated camera model, a key of :data:`~davis_io.chips.SENSOR_SIZES`: its
+            whole array, mono where the model was made mono only (None: a DAVIS346).
     """
 
     exposure_us: int | None = None
@@ -73,6 +75,7 @@ class CaptureRequest:
     still_frames: int = 0
     exposure_steps: tuple[float, ...] = ()
     lens: str = "pinhole"
+    model: str | None = None
 
     @property
     def kind(self) -> str:
@@ -120,6 +123,12 @@ def _open_emulator(request: CaptureRequest) -> PacketSource:
         settings["frame_interval_us"] = request.interval_us()
     if request.frames is not None:
         settings["frames"] = request.frames
+    if request.model is not None:
+        settings["model"] = request.model  # the emulator names the known models if it is none
+        if request.model in SENSOR_SIZES:
+            settings["width"], settings["height"] = SENSOR_SIZES[request.model]
+        if request.model not in COLOUR_MODELS:
+            settings["color_filter"] = ColorFilter.MONO
     return EmulatedCamera(request.emulate, **settings)
 
 

@@ -41,6 +41,8 @@ def run(capsys, *argv):
         (["record", "--auto-exposure", "1,0.5"], 2, "use them with --emulate"),
         (["record", "--emulate", "room", "--auto-exposure", "1,2"], 2, "shares of the exposure"),
         (["record", "--emulate", "room", "--auto-exposure", "half"], 2, "e.g. 1,0.5,0.25"),
+        (["record", "--camera", "DAVIS240"], 2, "use them with --emulate"),
+        (["record", "--emulate", "room", "--camera", "DAVIS128"], 2, "invalid choice"),
         (["fit", "{tmp}", "--time-budget", "abc"], 2, "'abc' is not a duration"),
         (["render", "{tmp}", "--path", "orbit", "--exposure", "-1"], 2, "must be > 0"),
         (["render", "{tmp}", "--path", "orbit", "--exposure", "0"], 2, "must be > 0"),

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from davis_io.chips import SENSOR_SIZES
 from davis_io.errors import UsageError
 from davis_io.session.bounds import Bounds
 from davis_io.session.defaults import BINS, DEFAULT_BINS, EXPOSURE_S, FRAME_COUNT, SEED
@@ -87,6 +88,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "frame is darker; default: every frame for --exposure)",
     )
     parser.add_argument(
+        "--camera",
+        choices=tuple(SENSOR_SIZES),
+        metavar="MODEL",
+        help="with --emulate: the camera model, its whole array: DAVIS346 (346x260, RGGB unless "
+        "--sensor random draws mono) or DAVIS240 (240x180, mono) (default: DAVIS346)",
+    )
+    parser.add_argument(
         "--lens",
         default="pinhole",
         metavar="pinhole|random|K1,K2,P1,P2[,K3]",
@@ -124,11 +132,12 @@ def run(args: argparse.Namespace) -> int:
         or args.still_frames
         or args.auto_exposure
         or args.lens != "pinhole"
+        or args.camera
     )
     if args.emulate is None and emulator_only:
         raise UsageError(
-            "--sensor, --seed, --event-window, --still-frames, --auto-exposure and --lens "
-            "describe the emulated camera: use them with --emulate"
+            "--sensor, --seed, --event-window, --still-frames, --auto-exposure, --lens and "
+            "--camera describe the emulated camera: use them with --emulate"
         )
     if args.replay is None and args.color_filter is not None:
         raise UsageError("--color-filter describes a replayed file's sensor: use it with --replay")
@@ -146,6 +155,7 @@ def run(args: argparse.Namespace) -> int:
         still_frames=args.still_frames,
         exposure_steps=args.auto_exposure,
         lens=args.lens,
+        model=args.camera,
     )
     out_dir = args.out or Path(default_session_name())
     printer = _StatusPrinter()

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from davis_io.chips import DEFAULT_FRAME_GAP_US
+from davis_io.chips import COLOUR_MODELS, DEFAULT_FRAME_GAP_US, SENSOR_SIZES
 from davis_io.emulator.dvs import DVS_PRESETS
 from davis_io.emulator.lens_view import lens_distortion
 from davis_io.emulator.raytrace import PinholeCamera
@@ -42,14 +42,17 @@ class EmulatorConfig:
             ``seed``: :mod:`davis_io.emulator.sensor`).
         dvs_preset: DVS pixel preset (``clean``, ``noisy``, ``v2e-clean``, ``v2e-noisy``).
         response: APS response curve (``reinhard_gamma``, ``film``, ``linear``, ``s_curve``).
-        color_filter: colour filter of APS and DVS pixels.
+        color_filter: colour filter of APS and DVS pixels (mono on a model made mono only; a
+            random sensor of such a model is drawn mono too).
         aps_noise: add shot and read noise to frames.
         gain_exposure_us: exposure whose reciprocal is the sensor gain, µs (0: ``exposure_us``,
             which keeps every exposure equally bright; another value makes an exposure bracket:
             shorter is darker, longer clips).
         noise_scale: multiplier of the DVS leak and shot-noise rates.
-        width: sensor columns.
-        height: sensor rows.
+        model: the camera model the recording states (a key of
+            :data:`~davis_io.chips.SENSOR_SIZES`).
+        width: sensor columns: the model's, or fewer (a region of interest).
+        height: sensor rows: the model's, or fewer.
         focal_px: focal length in pixels (principal point at the image centre).
         shake: RMS hand-shake rotation, degrees.
         shake_translation_m: RMS hand-shake translation, metres.
@@ -87,6 +90,7 @@ class EmulatorConfig:
     aps_noise: bool = True
     gain_exposure_us: int = 0
     noise_scale: float = 1.0
+    model: str = "DAVIS346"
     width: int = 346
     height: int = 260
     focal_px: float = 280.0
@@ -110,9 +114,17 @@ class EmulatorConfig:
             raise UsageError(f"colour filter {self.color_filter!r} is not one of {names}") from None
         if self.frame_interval_us == 0:
             object.__setattr__(self, "frame_interval_us", self.exposure_us + DEFAULT_FRAME_GAP_US)
+        if self.model not in SENSOR_SIZES:
+            names = ", ".join(SENSOR_SIZES)
+            raise UsageError(f"camera model {self.model!r} is not one of {names}")
         problems = []
         if self.width < 2 or self.height < 2 or self.focal_px <= 0:
             problems.append("width and height of at least 2 pixels and a positive focal length")
+        columns, rows = SENSOR_SIZES[self.model]
+        if self.width > columns or self.height > rows:
+            problems.append(f"a {self.model} has {columns}x{rows} pixels at most")
+        if self.model not in COLOUR_MODELS and self.color_filter.is_color:
+            problems.append(f"a {self.model} is mono: no colour filter")
         if self.shake < 0 or self.shake_translation_m < 0 or self.baseline_m < 0:
             problems.append("shake, shake translation and baseline must not be negative")
         if self.frames < 1 or self.test_views < 0 or self.subframes < 2:
@@ -194,6 +206,8 @@ class EmulatorConfig:
         """The sensor these settings name, or the one drawn from the seed."""
         if self.sensor == "random":
             sensor = draw_sensor(self.seed)
+            if self.model not in COLOUR_MODELS:
+                sensor = replace(sensor, color_filter=ColorFilter.MONO)
         else:
             sensor = default_sensor(self.dvs_preset, self.response, self.color_filter)
         return sensor.with_noise_scaled(self.noise_scale)

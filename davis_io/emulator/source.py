@@ -57,7 +57,7 @@ def _build_trajectory(config: EmulatorConfig, scene: Scene) -> Trajectory:
 
 
 class EmulatedCamera(Closing):
-    """A DAVIS346 that films a built-in scene: APS frames, DVS events and APS triggers.
+    """A DAVIS346 (or DAVIS240) that films a built-in scene: APS frames, DVS events, triggers.
 
     Use as ``with EmulatedCamera("room", seed=1) as camera: for packet in camera: ...``.
     ``camera.truth`` gives the ground truth (format: :mod:`davis_io.session.truth`) and
@@ -73,7 +73,7 @@ class EmulatedCamera(Closing):
         aps = {"exposure_us": self.config.exposure_us}
         aps["frame_interval_us"] = self.config.frame_interval_us
         self.info = SourceInfo(
-            camera="DAVIS346",
+            camera=self.config.model,
             serial="EMULATED",
             width=self.config.width,
             height=self.config.height,

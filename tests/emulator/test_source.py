@@ -189,6 +189,12 @@ def test_bad_settings_are_refused():
         EmulatedCamera("room", color_filter="CMYK")
     with pytest.raises(UsageError, match="must not be negative"):
         EmulatedCamera("room", shake=-1.0)
+    with pytest.raises(UsageError, match="camera model 'DAVIS128' is not one of DAVIS346"):
+        EmulatedCamera("room", model="DAVIS128")
+    with pytest.raises(UsageError, match="a DAVIS240 has 240x180 pixels at most"):
+        EmulatedCamera("room", model="DAVIS240", color_filter=ColorFilter.MONO)  # 346x260
+    with pytest.raises(UsageError, match="a DAVIS240 is mono"):
+        EmulatedCamera("room", model="DAVIS240", width=240, height=180)  # RGGB by default
 
 
 def test_aedat4_opens_in_dv_processing_with_the_same_content(small, tmp_path):

@@ -36,3 +36,23 @@ def test_an_auto_exposure_recording_keeps_each_frames_exposure(tmp_path):
         assert session.frames_table().exposure_us.tolist() == [20_000, 10_000, 5_000]
     report = session_report(tmp_path / "s", frames=False, repair=False, as_json=False)
     assert "5000..20000 (an auto exposure)" in report
+
+
+def test_an_emulated_davis240_records_its_whole_mono_array(tmp_path):
+    from davis_io.emulator import EmulatedCamera
+
+    request = CaptureRequest(
+        exposure_us=20_000, frames=2, emulate="room", model="DAVIS240", sensor="random", seed=10
+    )
+    result = record_capture(request, tmp_path / "s", bins=4)
+    manifest = result.manifest
+    assert (manifest.camera, manifest.width, manifest.height) == ("DAVIS240", 240, 180)
+    with Session.open(tmp_path / "s") as session:
+        # Seed 10 draws an RGGB sensor for a DAVIS346 (the blind benchmark's room-s10); a
+        # DAVIS240 was made mono only, so its drawn sensor is mono.
+        assert not session.color_filter.is_color
+        assert session.frames_table().exposure_us.tolist() == [20_000, 20_000]
+        assert session.bins(4).event_count.min() > 0
+    # The truth remembers the model: the same camera is made again from it.
+    again = EmulatedCamera.of_session(tmp_path / "s")
+    assert (again.config.model, again.config.width, again.config.height) == ("DAVIS240", 240, 180)
