@@ -123,6 +123,9 @@ def test_the_plan_has_ten_sessions_four_recorded_as_users_do():
     automatic = [spec for spec in BLIND_SESSIONS if spec.auto_exposure]
     assert automatic[0].record_options()[-2:] == ["--auto-exposure", "1,0.5,0.25"]
     assert "auto exposure of 150/75/37.5 ms in turn" in automatic[0].describe()
+    small = [spec for spec in BLIND_SESSIONS if spec.camera == "DAVIS240"]
+    assert small[0].record_options()[-2:] == ["--camera", "DAVIS240"]
+    assert small[0].describe() == "a DAVIS240"
     assert {spec.scene for spec in BLIND_SESSIONS} == {"room", "lamp", "corridor"}
     assert len({spec.key for spec in BLIND_SESSIONS}) == len(BLIND_SESSIONS)
     sensors = [draw_sensor(spec.seed) for spec in BLIND_SESSIONS]

@@ -72,6 +72,7 @@ class BlindSpec:
         lens: the emulator's lens (``pinhole``, ``random``: a distortion drawn from the seed).
         auto_exposure: each frame exposed for these shares of the exposure in turn (empty:
             every frame the exposure).
+        camera: the emulated camera model (a DAVIS240 films its 240x180 mono array).
     """
 
     scene: str
@@ -82,6 +83,7 @@ class BlindSpec:
     still_frames: int = 0
     lens: str = "pinhole"
     auto_exposure: tuple[float, ...] = ()
+    camera: str = "DAVIS346"
 
     @property
     def key(self) -> str:
@@ -101,6 +103,8 @@ class BlindSpec:
             options += ["--lens", self.lens]
         if self.auto_exposure:
             options += ["--auto-exposure", ",".join(f"{share:g}" for share in self.auto_exposure)]
+        if self.camera != "DAVIS346":
+            options += ["--camera", self.camera]
         return options
 
     def describe(self) -> str:
@@ -118,6 +122,8 @@ class BlindSpec:
         if self.auto_exposure:
             shares = "/".join(f"{self.exposure_s * 1000 * share:g}" for share in self.auto_exposure)
             parts.append(f"an auto exposure of {shares} ms in turn")
+        if self.camera != "DAVIS346":
+            parts.append(f"a {self.camera}")
         return "; ".join(parts)
 
 
@@ -134,8 +140,10 @@ BLIND_SESSIONS = (
     BlindSpec("room", 104, 0.05, 0.2, event_window_ms=3),
     BlindSpec("lamp", 105, lens="random"),
     BlindSpec("corridor", 106, auto_exposure=(1.0, 0.5, 0.25)),
+    BlindSpec("room", 107, camera="DAVIS240"),
+    BlindSpec("lamp", 108, camera="DAVIS240"),
 )
-"""Twelve sessions over the three scenes. The first six record as the emulator does by default
+"""Fourteen sessions over the three scenes. The first six record as the emulator does by default
 (150 ms exposures, continuous events): three monochrome (room-s22, lamp-s5, lamp-s9), three
 whose pixels have no refractory period and a fast cut-off (room-s10, room-s22, corridor-s16,
 where the threshold target applies), the four response families among them. The other four
@@ -144,7 +152,9 @@ only within 3 ms of each 50 ms exposure, a frame every 200 ms; room-s101 mono, r
 20 ms exposures every 200 ms (lamp-s102, RGGB) and four frames held still (corridor-s103).
 Seed 105 records through a distorted lens drawn from its seed, fitted without its calibration
 (COLMAP estimates the lens); seed 106, taken next before it was fitted, with an auto exposure
-(150, 75 and 37.5 ms in turn at one gain)."""
+(150, 75 and 37.5 ms in turn at one gain). Seeds 107 and 108, taken next before either was
+fitted, film with a DAVIS240: its 240x180 mono array behind the same focal length, so a
+narrower view (46° across against 63°)."""
 
 
 @dataclass
