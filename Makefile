@@ -53,7 +53,7 @@ bench: $(STAMP)
 	$(BIN)/python tools/bench_lens.py --publish
 	$(BIN)/python tools/bench_sharing.py --publish
 
-# The blind-camera benchmark alone: twelve randomly drawn sensors, each fitted from its recording.
+# The blind-camera benchmark alone: fourteen randomly drawn sensors, each fitted from its recording.
 bench-blind: $(STAMP)
 	$(BIN)/python tools/bench_blind.py --jobs 2 --publish $(RAY_OPTION)
 
