@@ -12,7 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from davis_io.chips import COLOUR_MODELS, DEFAULT_FRAME_GAP_US, SENSOR_SIZES
+from davis_io.chips import DEFAULT_FRAME_GAP_US
 from davis_io.errors import DeviceError, UsageError
 from davis_io.session.recorder import RecordingResult, record
 from davis_io.types import ColorFilter, PacketSource
@@ -109,6 +109,7 @@ def _open_replay(request: CaptureRequest) -> PacketSource:
 
 def _open_emulator(request: CaptureRequest) -> PacketSource:
     from davis_io.emulator import EmulatedCamera
+    from davis_io.emulator.config import model_settings
 
     settings = {
         "sensor": request.sensor,
@@ -124,11 +125,7 @@ def _open_emulator(request: CaptureRequest) -> PacketSource:
     if request.frames is not None:
         settings["frames"] = request.frames
     if request.model is not None:
-        settings["model"] = request.model  # the emulator names the known models if it is none
-        if request.model in SENSOR_SIZES:
-            settings["width"], settings["height"] = SENSOR_SIZES[request.model]
-        if request.model not in COLOUR_MODELS:
-            settings["color_filter"] = ColorFilter.MONO
+        settings.update(model_settings(request.model))
     return EmulatedCamera(request.emulate, **settings)
 
 

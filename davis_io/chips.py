@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["COLOUR_MODELS", "DEFAULT_FRAME_GAP_US", "SENSOR_SIZES", "identify_chip"]
+__all__ = [
+    "COLOUR_MODELS",
+    "DEFAULT_FRAME_GAP_US",
+    "DEFAULT_MODEL",
+    "SENSOR_SIZES",
+    "identify_chip",
+]
 
 DEFAULT_FRAME_GAP_US = 50_000
 """Time from one frame's exposure start to the next one's beyond the exposure, by default (a
@@ -12,6 +18,9 @@ camera and the emulator alike): room for the readout, so no exposure overlaps th
 
 SENSOR_SIZES = {"DAVIS346": (346, 260), "DAVIS240": (240, 180)}
 """Camera model -> (width, height) in pixels of its DVS and APS arrays."""
+
+DEFAULT_MODEL = "DAVIS346"
+"""The model the emulator films with unless told another."""
 
 COLOUR_MODELS = frozenset({"DAVIS346"})
 """Models also made with a colour filter (RGGB); the DAVIS240 was made mono only."""

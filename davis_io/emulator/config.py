@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from davis_io.chips import COLOUR_MODELS, DEFAULT_FRAME_GAP_US, SENSOR_SIZES
+from davis_io.chips import COLOUR_MODELS, DEFAULT_FRAME_GAP_US, DEFAULT_MODEL, SENSOR_SIZES
 from davis_io.emulator.dvs import DVS_PRESETS
 from davis_io.emulator.lens_view import lens_distortion
 from davis_io.emulator.raytrace import PinholeCamera
@@ -17,11 +17,33 @@ from davis_io.errors import UsageError
 from davis_io.lens import Lens
 from davis_io.types import ColorFilter
 
-__all__ = ["EmulatorConfig"]
+__all__ = ["EmulatorConfig", "model_settings"]
 
 _TRUTH_BYTES_PER_PIXEL = 3 * 4 * 8
 """Memory per pixel of a view's truth and its renders while it is made: linear RGB (float32)
 and depth, the bracket of LDR images, the sub-frame renders of one exposure."""
+
+
+def _check_model(model: str) -> None:
+    """Raises UsageError: ``model`` is not a camera model the emulator knows."""
+    if model not in SENSOR_SIZES:
+        raise UsageError(f"camera model {model!r} is not one of {', '.join(SENSOR_SIZES)}")
+
+
+def model_settings(model: str) -> dict:
+    """The :class:`EmulatorConfig` fields that film with ``model``'s whole array.
+
+    Its size, and mono where the model was made mono only.
+
+    Raises:
+        UsageError: an unknown model.
+    """
+    _check_model(model)
+    width, height = SENSOR_SIZES[model]
+    settings = {"model": model, "width": width, "height": height}
+    if model not in COLOUR_MODELS:
+        settings["color_filter"] = ColorFilter.MONO
+    return settings
 
 
 @dataclass(frozen=True)
@@ -90,7 +112,7 @@ class EmulatorConfig:
     aps_noise: bool = True
     gain_exposure_us: int = 0
     noise_scale: float = 1.0
-    model: str = "DAVIS346"
+    model: str = DEFAULT_MODEL
     width: int = 346
     height: int = 260
     focal_px: float = 280.0
@@ -114,9 +136,7 @@ class EmulatorConfig:
             raise UsageError(f"colour filter {self.color_filter!r} is not one of {names}") from None
         if self.frame_interval_us == 0:
             object.__setattr__(self, "frame_interval_us", self.exposure_us + DEFAULT_FRAME_GAP_US)
-        if self.model not in SENSOR_SIZES:
-            names = ", ".join(SENSOR_SIZES)
-            raise UsageError(f"camera model {self.model!r} is not one of {names}")
+        _check_model(self.model)
         problems = []
         if self.width < 2 or self.height < 2 or self.focal_px <= 0:
             problems.append("width and height of at least 2 pixels and a positive focal length")

@@ -36,6 +36,7 @@ from benchlib.targets import (
 )
 from davis_io.calibration.consistency import THRESHOLD_RANGE
 from davis_io.calibration.estimate import LATENCIES_US
+from davis_io.chips import DEFAULT_MODEL
 from davis_io.poses.truth import compare_with_truth
 from davis_io.session import DEFAULT_BINS, SensorCalibration, Session
 
@@ -83,7 +84,7 @@ class BlindSpec:
     still_frames: int = 0
     lens: str = "pinhole"
     auto_exposure: tuple[float, ...] = ()
-    camera: str = "DAVIS346"
+    camera: str = DEFAULT_MODEL
 
     @property
     def key(self) -> str:
@@ -103,7 +104,7 @@ class BlindSpec:
             options += ["--lens", self.lens]
         if self.auto_exposure:
             options += ["--auto-exposure", ",".join(f"{share:g}" for share in self.auto_exposure)]
-        if self.camera != "DAVIS346":
+        if self.camera != DEFAULT_MODEL:
             options += ["--camera", self.camera]
         return options
 
@@ -122,7 +123,7 @@ class BlindSpec:
         if self.auto_exposure:
             shares = "/".join(f"{self.exposure_s * 1000 * share:g}" for share in self.auto_exposure)
             parts.append(f"an auto exposure of {shares} ms in turn")
-        if self.camera != "DAVIS346":
+        if self.camera != DEFAULT_MODEL:
             parts.append(f"a {self.camera}")
         return "; ".join(parts)
 
