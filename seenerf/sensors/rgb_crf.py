@@ -20,6 +20,7 @@ __all__ = [
     "apply_power_crf",
     "apply_rgb_crf",
     "interpolate_response",
+    "rising_output_weights",
     "warm_start_target",
 ]
 
@@ -45,6 +46,18 @@ def apply_rgb_crf(
     """
     hidden = torch.relu(log_exposure[..., None] * weight_in + bias_in)
     return torch.sigmoid((hidden * weight_out).sum(-1) + bias_out)
+
+
+def rising_output_weights(weight_in: torch.Tensor, weight_out: torch.Tensor) -> torch.Tensor:
+    """Second-layer weights that make every hidden unit's term rise with exposure.
+
+    A hidden unit ``relu(w_in x + b)`` rises where ``w_in > 0`` and falls where ``w_in < 0``;
+    weighted by ``|w_out|`` with ``w_in``'s sign, each term rises, and so does their sum: a
+    response never reads darker for more light. Unconstrained, the MLP can fold over above the
+    exposures the frames show (one learned curve fell from 0.91 to 0 past its clip level, and the
+    brightest views rendered black).
+    """
+    return weight_out.abs() * torch.sign(weight_in)
 
 
 def apply_power_crf(log_exposure: torch.Tensor, exponent: torch.Tensor) -> torch.Tensor:
@@ -112,7 +125,10 @@ def warm_start_target(x: torch.Tensor) -> torch.Tensor:
 
 
 class RgbCrf(nn.Module):
-    """Three per-channel response MLPs with the reference warm start and anchor term.
+    """Three per-channel response MLPs with the reference warm start and anchor term, rising.
+
+    The reference leaves the MLPs free; here each is held rising
+    (:func:`rising_output_weights`), as every camera's response is.
 
     Args:
         hidden: hidden width K (128).
@@ -143,10 +159,9 @@ class RgbCrf(nn.Module):
         self.anchor_value = anchor_value
 
     def forward(self, log_exposure: torch.Tensor) -> torch.Tensor:
-        """See :func:`apply_rgb_crf`."""
-        return apply_rgb_crf(
-            log_exposure, self.weight_in, self.bias_in, self.weight_out, self.bias_out
-        )
+        """See :func:`apply_rgb_crf` and :func:`rising_output_weights`."""
+        weight_out = rising_output_weights(self.weight_in, self.weight_out)
+        return apply_rgb_crf(log_exposure, self.weight_in, self.bias_in, weight_out, self.bias_out)
 
     def anchor_loss(self) -> torch.Tensor:
         """See :func:`anchor_error`."""

@@ -90,6 +90,36 @@ def test_rgb_crf_warm_start_reaches_reference_curve():
     assert error < 0.08
 
 
+def test_the_learned_response_rises_for_weights_that_would_fold_it_over():
+    # Unit 0 rises as relu(u); unit 1 falls as relu(u - 2) with weight -3 out (free MLP):
+    # relu(u) - 3 relu(u - 2) falls past u = 2, from sigmoid(2) at 2 to sigmoid(-2) at 4.
+    weight_in = torch.zeros(3, 2)
+    weight_in[:, 0] = weight_in[:, 1] = 1.0
+    bias_in = torch.zeros(3, 2)
+    bias_in[:, 1] = -2.0
+    weight_out = torch.zeros(3, 2)
+    weight_out[:, 0], weight_out[:, 1] = 1.0, -3.0
+    u = torch.tensor([2.0, 4.0])[:, None].expand(-1, 3)
+    folded = apply_rgb_crf(u, weight_in, bias_in, weight_out, torch.zeros(3))
+    assert folded[:, 0].tolist() == pytest.approx([0.8807971, 0.1192029], abs=1e-6)
+    crf = RgbCrf(hidden=2)
+    with torch.no_grad():
+        for parameter, value in zip(
+            (crf.weight_in, crf.bias_in, crf.weight_out, crf.bias_out),
+            (weight_in, bias_in, weight_out, torch.zeros(3)),
+            strict=True,
+        ):
+            parameter.copy_(value)
+    # Held rising, unit 1 adds 3 relu(u - 2): sigmoid(2) at 2, sigmoid(4 + 6) at 4.
+    assert crf(u)[:, 0].tolist() == pytest.approx([0.8807971, 0.9999546], abs=1e-6)
+    with torch.no_grad():
+        for parameter in crf.parameters():
+            parameter.normal_(generator=torch.Generator().manual_seed(5))
+    dense = torch.linspace(-20, 20, 2001)[:, None].expand(-1, 3)
+    values = crf(dense).detach()
+    assert (values[1:] - values[:-1] >= -1e-6).all()
+
+
 def test_the_monotone_response_follows_its_two_slopes_and_always_rises():
     crf = MonotoneCrf(anchor_log_exposure=0.0, anchor_value=0.5)
     x = torch.tensor([-20.0, -3.0, 0.0, 3.0, 20.0])[:, None].expand(-1, 3)
