@@ -189,6 +189,35 @@ def test_linear_frames_whose_dark_end_noise_bends_the_curve_are_linear_with_blac
     assert linear is None and black == 0.0 and "below any black level" in notes.reasons["response"]
 
 
+def test_a_raw_frames_curve_bent_by_slow_pixels_is_linear_but_not_without_the_raw_marks():
+    from davis_io.calibration.estimate import _reviewed_response
+    from davis_io.calibration.response_fit import FrameLevels, InverseResponse
+
+    # The free curve measured on linear frames of an emulated pixel with a 65 Hz cut-off:
+    # 0.041 RMS from a straight line in ln(v - 0.0147), its events lagging most in the dark.
+    knots = np.array(
+        [0.0753, 0.0792, 0.0841, 0.089, 0.0958, 0.1026, 0.1095, 0.1193, 0.13, 0.1437, 0.1593]
+        + [0.1779, 0.1984, 0.2239, 0.2864, 0.6647]
+    )
+    log_g = np.array(
+        [0.0, 0.0325, 0.1118, 0.1825, 0.2725, 0.3554, 0.4339, 0.5479, 0.6499, 0.7596, 0.8887]
+        + [1.0105, 1.1341, 1.2629, 1.5709, 2.6967]
+    )
+    found = type("Found", (), {"response": InverseResponse(knots, log_g)})()
+    # The frames pile up at 0.0147 and clip at 0.863: a raw ADC's marks.
+    raw = FrameLevels(black_level=0.0147, saturation=0.863, low=0.075, high=0.84)
+    lines = []
+    black, saturation, linear = _reviewed_response(
+        found, raw, Assumptions(lambda line: None), lines.append
+    )
+    assert lines == ["response linear: the free curve is a power 1.12 of v - 0.015 to 0.041 RMS"]
+    assert (black, saturation) == (0.0147, 0.863) and linear == pytest.approx(1.117, abs=0.001)
+    # The same curve from frames that never clip below full scale is held to the strict limit.
+    unclipped = FrameLevels(black_level=0.0147, saturation=1.0, low=0.075, high=0.84)
+    _, _, linear = _reviewed_response(found, unclipped, Assumptions(lambda line: None), print)
+    assert linear is None
+
+
 @pytest.mark.parametrize(
     ("measured", "power", "scale", "said"),
     [
