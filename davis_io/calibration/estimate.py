@@ -97,11 +97,11 @@ less than this RMS (ln units)."""
 
 RAW_LINEAR_RMS = 0.06
 """:data:`LINEAR_RMS` for frames that bear a raw ADC's two marks: values piled up at a black
-level above 0 and at a clip level below full scale. Slow pixels bend a raw frame's free curve
-(their events lag the most in the dark): 0.041 and 0.045 RMS on the same emulated linear
-sensor with a 65 Hz cut-off on a DAVIS240 and a DAVIS346, against 0.010-0.027 for faster
-linear ones; every tone curve measured, none of them with a black level above 0, departed by
-0.078 or more."""
+level above 0 and at a clip level below full scale. Such frames are a raw reading, and their
+free curve may bend more than a tone curve's noise allows: 0.037-0.045 RMS on one emulated
+linear sensor of a dark scene (a DAVIS240 and a DAVIS346, with its 65 Hz pixels and with 3 kHz
+ones), against 0.010-0.027 on the other linear ones measured; every tone curve measured, none
+of them with a black level above 0, departed by 0.078 or more."""
 
 DARK_END = 0.1
 """Frame values below this share of full scale are the dark end, where noise bends the free

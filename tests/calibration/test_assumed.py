@@ -189,12 +189,12 @@ def test_linear_frames_whose_dark_end_noise_bends_the_curve_are_linear_with_blac
     assert linear is None and black == 0.0 and "below any black level" in notes.reasons["response"]
 
 
-def test_a_raw_frames_curve_bent_by_slow_pixels_is_linear_but_not_without_the_raw_marks():
+def test_a_raw_frames_bent_curve_is_linear_but_not_without_the_raw_marks():
     from davis_io.calibration.estimate import _reviewed_response
     from davis_io.calibration.response_fit import FrameLevels, InverseResponse
 
-    # The free curve measured on linear frames of an emulated pixel with a 65 Hz cut-off:
-    # 0.041 RMS from a straight line in ln(v - 0.0147), its events lagging most in the dark.
+    # The free curve measured on linear frames of an emulated dark scene: 0.041 RMS from a
+    # straight line in ln(v - 0.0147).
     knots = np.array(
         [0.0753, 0.0792, 0.0841, 0.089, 0.0958, 0.1026, 0.1095, 0.1193, 0.13, 0.1437, 0.1593]
         + [0.1779, 0.1984, 0.2239, 0.2864, 0.6647]
