@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from davis_io.chips import SENSOR_SIZES
+from davis_io.chips import DEFAULT_MODEL, SENSOR_SIZES
 from davis_io.errors import UsageError
 from davis_io.session.bounds import Bounds
 from davis_io.session.defaults import BINS, DEFAULT_BINS, EXPOSURE_S, FRAME_COUNT, SEED
@@ -92,7 +92,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=tuple(SENSOR_SIZES),
         metavar="MODEL",
         help="with --emulate: the camera model, its whole array: DAVIS346 (346x260, RGGB unless "
-        "--sensor random draws mono) or DAVIS240 (240x180, mono) (default: DAVIS346)",
+        f"--sensor random draws mono) or DAVIS240 (240x180, mono) (default: {DEFAULT_MODEL})",
     )
     parser.add_argument(
         "--lens",

@@ -113,8 +113,8 @@ class EmulatorConfig:
     gain_exposure_us: int = 0
     noise_scale: float = 1.0
     model: str = DEFAULT_MODEL
-    width: int = 346
-    height: int = 260
+    width: int = SENSOR_SIZES[DEFAULT_MODEL][0]
+    height: int = SENSOR_SIZES[DEFAULT_MODEL][1]
     focal_px: float = 280.0
     shake: float = 0.8
     shake_translation_m: float = 0.002
