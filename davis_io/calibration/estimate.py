@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from itertools import takewhile
 
@@ -107,9 +107,18 @@ DARK_END = 0.1
 """Frame values below this share of full scale are the dark end, where noise bends the free
 curve."""
 
-LINEAR_SCALE_SPREAD = 0.1
-"""The thresholds' uncertainty, as a share, where their scale is the linear frames' power: twice
-the largest error of that power measured on linear frames (5 %)."""
+LINEAR_SCALE_SPREAD = 0.05
+"""The thresholds' standard uncertainty, as a share, where the response is held linear: the
+largest error of thresholds so fitted on the emulated linear sessions was 8.5 % (`room-s22`:
+its frames' noise; then `lamp-s108` 4.9 %, `corridor-s103` 2.8 %, `corridor-s0` 0.4 %), within
+two of these."""
+
+HELD_LINEAR_AGREEMENT = np.sqrt(2)
+"""Where the blur pins the thresholds' scale, the line is held only if the free curve's power
+lies within this factor of 1, the scale the line implies within that of the blur's. The free
+curve trades its top against the scale (linear frames' powers 0.84-1.12 measured, thresholds
+as far off), but a tone curve straight in ln v (a pure gamma) has a power of 1.8 or more: the
+blur's scale, not the line's, is then the measurement."""
 
 MIN_BRIGHT_KNOTS = 4
 """Knots above the dark end a straight line through 0 is judged on at the least (frames whose
@@ -427,6 +436,7 @@ class _Consistency:
 
     theta: np.ndarray
     spread: np.ndarray
+    pixel_share: np.ndarray
     scale: CommonScale
     latency_us: int
     latency_costs: np.ndarray
@@ -464,6 +474,7 @@ def _consistency(
     return _Consistency(
         theta=scale.theta,
         spread=np.maximum(spread, scale.theta * scale.width),
+        pixel_share=spread / theta,
         scale=scale,
         latency_us=latency,
         latency_costs=costs,
@@ -511,10 +522,15 @@ def calibrate_frames(
     latency = _reviewed_latency(found, notes)
     factor_on, factor_off = _reviewed_factors(found.factors, notes)
     black, saturation, linear_power, noise = _response(recording, found, levels, notes, progress)
-    theta, spread, frames_scale = _reviewed_scale(found, thresholds, linear_power, notes)
     is_linear = linear_power is not None
-    # the free curve's exposures are in units of the thresholds it was solved beside
-    log_exposure = found.response.log_exposure * (frames_scale or 1.0)
+    held = None
+    if is_linear and "thresholds" not in notes:
+        held = _held_linear(found, black, linear_power, progress)
+    theta, spread = _reviewed_scale(found, thresholds, held, notes)
+    residual, log_exposure = found.residual, found.response.log_exposure
+    if held is not None:
+        residual, response = replace(found.problem, linear_black=black).solve(*theta)
+        log_exposure = response.log_exposure
     if is_linear and noise is None:
         noise = frame_noise(recording.frames, black, saturation, recording.adc_step)
     if noise:
@@ -542,10 +558,12 @@ def calibrate_frames(
         response_log_exposure=log_exposure,
         pixel_factor_on=factor_on.reshape(height, width).astype(np.float32),
         pixel_factor_off=factor_off.reshape(height, width).astype(np.float32),
-        residual_events=float(np.sqrt(np.mean(found.residual**2)) / (0.5 * theta.sum())),
+        residual_events=float(np.sqrt(np.mean(residual**2)) / (0.5 * theta.sum())),
         pairs=found.problem.pairs,
-        source=_source(notes, frames_scale is not None),
-        method=_METHOD + (f"; frame noise: {_NOISE_METHOD}" if noise else ""),
+        source=_source(notes, held is not None),
+        method=_METHOD
+        + (f"; {_HELD_LINEAR_METHOD}" if held is not None else "")
+        + (f"; frame noise: {_NOISE_METHOD}" if noise else ""),
         assumed=dict(notes.reasons),
     )
 
@@ -556,6 +574,10 @@ _METHOD = (
     "checked against its search's bounds and what a DAVIS can have; uncertainty: the larger of "
     "a split-half spread over the pixels and the width of the common scale's profile (or the "
     "range it cannot tell apart); dead time: 1st percentile of a pixel's event intervals"
+)
+_HELD_LINEAR_METHOD = (
+    "linear frames: thresholds fitted again with the response held to ln(v - black), "
+    f"uncertainty {LINEAR_SCALE_SPREAD:.0%} at least"
 )
 _NOISE_METHOD = "same-colour neighbours in the smoothest places of each level"
 _NOMINAL = f"the nominal {DEFAULT_THRESHOLD} for ON and OFF, ± 50 %"
@@ -592,38 +614,57 @@ def _reviewed_thresholds(found: _Consistency, notes: Assumptions) -> tuple[np.nd
     return found.theta, found.spread
 
 
+def _held_linear(found: _Consistency, black: float, power: float, progress) -> np.ndarray | None:
+    """The thresholds fitted again with the response held to the line of linear frames.
+
+    A free curve trades its shape against the thresholds' common scale: on emulated linear
+    sessions its top bent up and the blur pinned the scale 3-14 % off (`lamp-s108` +14 %,
+    `corridor-s103` -10 %); held to ``ln(v - black)``, the frames state the scale themselves
+    (+4.9 % and +2.8 %), also where the frames are too sharp for the blur to pin it.
+
+    Returns:
+        The thresholds ``(2,)``; None where the blur pins a scale the line disagrees with
+        (:data:`HELD_LINEAR_AGREEMENT`) or the line puts them where no DAVIS has them.
+    """
+    if found.scale.measured and not 1 / HELD_LINEAR_AGREEMENT < power < HELD_LINEAR_AGREEMENT:
+        progress(
+            f"response not held linear: the free curve's power {power:.2f} is too far from 1 "
+            "for the blur's thresholds"
+        )
+        return None
+    problem = replace(found.problem, linear_black=black)
+    theta, _ = fit_thresholds(problem, found.theta / power)
+    if not all(THRESHOLD.holds(float(value)) for value in theta):
+        progress(f"response not held linear: it puts the thresholds at {np.round(theta, 3)}")
+        return None
+    progress(f"thresholds with the response held linear: ON {theta[0]:.3f}, OFF {theta[1]:.3f}")
+    return theta
+
+
 def _reviewed_scale(
     found: _Consistency,
     thresholds: tuple[np.ndarray, np.ndarray],
-    linear_power: float | None,
+    held_linear: np.ndarray | None,
     notes: Assumptions,
-) -> tuple[np.ndarray, np.ndarray, float | None]:
-    """The thresholds at the common scale the blur pins, else at linear frames', else nominal.
-
-    Where the blur leaves the scale free, the thresholds stand at the nominal scale, and so the
-    free curve of frames judged linear is a power of v that is the true thresholds' share of
-    the nominal ones: 0.77-0.84 measured on linear 8-bit frames of sharp exposures against true
-    shares of 0.80-0.83. Events and frames then agree only at that scale.
+) -> tuple[np.ndarray, np.ndarray]:
+    """The thresholds at the linear frames' scale, else at the one the blur pins, else nominal.
 
     Returns:
-        The thresholds, their uncertainty, and the linear frames' scale where it is theirs
-        (None where it is not).
+        The thresholds and their uncertainty.
     """
     theta, spread = thresholds
-    if found.scale.measured or "thresholds" in notes:
-        return theta, spread, None
+    if "thresholds" in notes:
+        return theta, spread
     reason = "the frames are too sharp for the blur to pin the thresholds' common scale"
-    if linear_power is not None and THRESHOLD_SCALE.holds(linear_power):
-        notes.add(
-            "threshold_scale",
-            reason,
-            f"x{linear_power:.2f} of the nominal {DEFAULT_THRESHOLD}, the power of the linear "
-            "frames' free curve, with the measured ratio",
-        )
-        scaled = theta * linear_power
-        return scaled, np.maximum(spread * linear_power, LINEAR_SCALE_SPREAD * scaled), linear_power
-    notes.add("threshold_scale", reason, f"the nominal {DEFAULT_THRESHOLD} with the measured ratio")
-    return theta, spread, None
+    if held_linear is not None:
+        if not found.scale.measured:
+            instead = "the linear frames' scale, with the measured ratio"
+            notes.add("threshold_scale", reason, instead)
+        return held_linear, held_linear * np.maximum(found.pixel_share, LINEAR_SCALE_SPREAD)
+    if not found.scale.measured:
+        instead = f"the nominal {DEFAULT_THRESHOLD} with the measured ratio"
+        notes.add("threshold_scale", reason, instead)
+    return theta, spread
 
 
 def _reviewed_latency(found: _Consistency, notes: Assumptions) -> int:
@@ -717,9 +758,9 @@ def _linear_above_dark_end(found: _Consistency, progress) -> float | None:
     Noise in the darkest values flattens the free curve's dark end (their errors attenuate the
     slope they are regressed on), which the search for the straightest black reads as a level
     below zero: -0.03 to -0.06 on linear 8-bit frames with black at 0. Above the dark end such a
-    curve is straight with black at 0, and its power is the true thresholds' share of the nominal
-    ones (0.77-0.84 measured against 0.80-0.83), which a DAVIS keeps within
-    :data:`THRESHOLD_SCALE`; a tone curve that only looks straight is not.
+    curve is straight with black at 0, and its power is the thresholds it was solved beside over
+    the true ones, which a DAVIS keeps within :data:`THRESHOLD_SCALE` of each other at the
+    nominal scale; a tone curve that only looks straight is not.
     """
     if np.count_nonzero(found.response.knots >= DARK_END) < MIN_BRIGHT_KNOTS:
         return None

@@ -69,8 +69,8 @@ class SensorCalibration:
         source: ``measured``, ``measured ratio, nominal scale`` (frames too sharp for the blur
             to pin the scale: the thresholds' ratio and pixel factors are measured, their common
             scale is :data:`~davis_io.session.DEFAULT_THRESHOLD`), ``measured ratio, linear
-            frames scale`` (as before, the scale read from frames linear in exposure: the power
-            their free curve is of the values), ``assumed`` (the thresholds
+            frames scale`` (as before, the scale read from frames linear in exposure, the
+            response held to their line), ``assumed`` (the thresholds
             could not be measured: the nominal ones, with a wide uncertainty), ``given``,
             ``truth`` or ``default`` (nothing could be measured).
         method: one line saying how the values were found.

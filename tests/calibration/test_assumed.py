@@ -219,32 +219,34 @@ def test_a_raw_frames_bent_curve_is_linear_but_not_without_the_raw_marks():
 
 
 @pytest.mark.parametrize(
-    ("measured", "power", "scale", "said"),
+    ("measured", "held", "said"),
     [
-        (True, 0.8, 1.0, None),  # the blur pins the scale: the frames' power is not needed
-        (False, 0.8, 0.8, "x0.80 of the nominal 0.3, the power of the linear frames'"),
-        (False, None, 1.0, "the nominal 0.3 with the measured ratio"),  # not linear
-        (False, 0.3, 1.0, "the nominal 0.3 with the measured ratio"),  # no DAVIS's scale
+        (True, None, None),  # the blur pins the scale
+        (True, (0.25, 0.30), None),  # the linear frames state it better
+        (False, (0.25, 0.30), "the linear frames' scale, with the measured ratio"),
+        (False, None, "the nominal 0.3 with the measured ratio"),  # neither
     ],
 )
-def test_a_free_scale_is_the_linear_frames_power_where_a_davis_can_have_it(
-    measured, power, scale, said
-):
+def test_the_scale_is_the_linear_frames_else_the_blurs_else_nominal(measured, held, said):
     from davis_io.calibration.estimate import _reviewed_scale
 
-    found = type("Found", (), {"scale": type("Scale", (), {"measured": measured})()})()
+    scale = type("Scale", (), {"measured": measured})()
+    found = type("Found", (), {"scale": scale, "pixel_share": np.array([0.02, 0.08])})()
     theta, spread = np.array([0.27, 0.33]), np.array([0.01, 0.01])
     notes = Assumptions(lambda line: None)
-    got, uncertainty, frames_scale = _reviewed_scale(found, (theta, spread), power, notes)
-    np.testing.assert_allclose(got, theta * scale)
-    assert (frames_scale is not None) == (scale != 1.0)
-    if said is None:
-        assert "threshold_scale" not in notes
+    held = None if held is None else np.array(held)
+    got, uncertainty = _reviewed_scale(found, (theta, spread), held, notes)
+    if held is None:
+        np.testing.assert_allclose(got, theta)
         np.testing.assert_allclose(uncertainty, spread)
     else:
+        np.testing.assert_allclose(got, held)
+        # The pixels' split-half share where it is larger, else 5 % of each threshold.
+        np.testing.assert_allclose(uncertainty, [0.0125, 0.024])
+    if said is None:
+        assert "threshold_scale" not in notes
+    else:
         assert said in notes.reasons["threshold_scale"]
-    if frames_scale is not None:
-        np.testing.assert_allclose(uncertainty, 0.1 * got)  # the power's own uncertainty
 
 
 def test_a_flat_profile_locates_nothing():

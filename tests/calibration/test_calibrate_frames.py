@@ -119,6 +119,27 @@ def test_frames_too_sharp_for_the_scale_keep_the_measured_ratio_at_the_nominal_s
     assert calibration.threshold_on_sd > 0.4 * calibration.threshold_on
 
 
+@pytest.mark.parametrize(("on", "off"), [(0.15, 0.21), (0.45, 0.35)])
+def test_linear_frames_too_sharp_for_the_blur_state_the_scale_themselves(on, off):
+    # The same 4 ms exposures, frames linear above a black level: held to ln(v - black), the
+    # frames' changes are the events' own, at the true thresholds' scale. Read instead as the
+    # nominal scale times the power the free curve solved at it has (the power is the nominal
+    # over the true scale), they came out 2.9 and 0.56 times the truth.
+    response = Response("linear", black=0.04, slope=0.6, saturation=0.95)
+    recording, theta_on, theta_off = synthetic_recording(
+        KnownSensor(on, off, 0.02, response), exposure_us=4_000
+    )
+    calibration = calibrate_frames(recording)
+    assert calibration.source == "measured ratio, linear frames scale"
+    assert calibration.threshold_on == pytest.approx(np.median(theta_on), rel=0.03)
+    assert calibration.threshold_off == pytest.approx(np.median(theta_off), rel=0.03)
+    assert calibration.threshold_on_sd >= 0.05 * calibration.threshold_on
+    # The stored curve is the line the thresholds were fitted beside.
+    values, log_g = calibration.response_value, calibration.response_log_exposure
+    expected = np.log(values - calibration.black_level)
+    np.testing.assert_allclose(log_g, expected - expected[0], atol=1e-9)
+
+
 @pytest.mark.parametrize("family", ["linear", "reinhard_gamma"])
 def test_an_auto_exposure_that_changes_every_frame_is_measured_as_a_fixed_one(family):
     # 60, 30 and 15 ms in turn at one gain: consecutive frames of the same light differ by
