@@ -119,13 +119,17 @@ def test_frames_too_sharp_for_the_scale_keep_the_measured_ratio_at_the_nominal_s
     assert calibration.threshold_on_sd > 0.4 * calibration.threshold_on
 
 
-@pytest.mark.parametrize(("on", "off"), [(0.15, 0.21), (0.45, 0.35)])
-def test_linear_frames_too_sharp_for_the_blur_state_the_scale_themselves(on, off):
+@pytest.mark.parametrize(
+    ("on", "off", "slope"), [(0.15, 0.21, 0.6), (0.45, 0.35, 0.6), (0.25, 0.35, 0.3)]
+)
+def test_linear_frames_too_sharp_for_the_blur_state_the_scale_themselves(on, off, slope):
     # The same 4 ms exposures, frames linear above a black level: held to ln(v - black), the
     # frames' changes are the events' own, at the true thresholds' scale. Read instead as the
     # nominal scale times the power the free curve solved at it has (the power is the nominal
-    # over the true scale), they came out 2.9 and 0.56 times the truth.
-    response = Response("linear", black=0.04, slope=0.6, saturation=0.95)
+    # over the true scale), they came out 2.9 and 0.56 times the truth. At a slope of 0.3 the
+    # darkest texture's values, 0.013 above black, looked like its pile-up (0.07 % of them);
+    # held to that line the thresholds were 9 % high.
+    response = Response("linear", black=0.04, slope=slope, saturation=0.95)
     recording, theta_on, theta_off = synthetic_recording(
         KnownSensor(on, off, 0.02, response), exposure_us=4_000
     )
@@ -138,6 +142,18 @@ def test_linear_frames_too_sharp_for_the_blur_state_the_scale_themselves(on, off
     values, log_g = calibration.response_value, calibration.response_log_exposure
     expected = np.log(values - calibration.black_level)
     np.testing.assert_allclose(log_g, expected - expected[0], atol=1e-9)
+
+
+def test_linear_frames_that_never_go_black_keep_the_scale_the_blur_pins():
+    # No pile-up tells the black level; the one that straightens the free curve best, 0.020
+    # (true 0.040), would have put the thresholds held to its line 4.6 % low.
+    response = Response("linear", black=0.04, slope=0.6, saturation=0.95)
+    recording, theta_on, theta_off = synthetic_recording(KnownSensor(0.25, 0.35, 0.02, response))
+    calibration = calibrate_frames(recording)
+    assert calibration.response_linear and calibration.source == "measured"
+    assert "held to ln(v - black)" not in calibration.method
+    assert calibration.threshold_on == pytest.approx(np.median(theta_on), rel=0.02)
+    assert calibration.threshold_off == pytest.approx(np.median(theta_off), rel=0.02)
 
 
 @pytest.mark.parametrize("family", ["linear", "reinhard_gamma"])
