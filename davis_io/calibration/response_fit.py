@@ -26,12 +26,14 @@ _LOW_MARGIN = 0.06
 frames' noise is a large share of ln g, and noise in the values flattens the fitted curve (with
 it the thresholds: by a sixth on a dark scene at a margin of 0.02, by 2 % at 0.05)."""
 
+CLIP_SHARE = 5e-4
+"""Share of the frame values within two ADC steps of their highest for that to be a clip level."""
+
 BLACK_SHARE = 5e-3
-"""Share of the frame values at their lowest for that to be a black level. Where the light
-never fails, the darkest texture's own values look like a small pile-up: 0.07 % of a synthetic
-linear recording's values lay within two steps of their lowest, 0.013 above the true black
-(which put the thresholds 9 % high, held to that line). Emulated raw frames with dark places
-held 3.9-16 % there; clips are told at 0.05 %."""
+"""Share of the frame values within two ADC steps of their lowest for that to be a black level.
+Where the light never fails, the darkest texture's own values look like a small pile-up: 0.07 %
+of a synthetic linear recording's values lay there, 0.013 above the true black (which put the
+thresholds 9 % high, held to that line). Emulated raw frames with dark places held 3.9-16 %."""
 
 _HIGH_MARGIN = 0.02
 """Usable frame values end this far below the clip level."""
@@ -53,7 +55,7 @@ class FrameLevels:
     high: float
 
 
-def _pile_up(values: np.ndarray, at: float, tolerance: float, share: float = 5e-4) -> bool:
+def _pile_up(values: np.ndarray, at: float, tolerance: float, share: float) -> bool:
     """True when at least ``share`` of the values sit within ``tolerance`` of ``at``."""
     return np.mean(np.abs(values - at) <= tolerance) >= share
 
@@ -67,9 +69,7 @@ def frame_levels(frames: np.ndarray, step: float) -> FrameLevels:
     """
     values = np.asarray(frames, np.float64).ravel()
     top, bottom = float(values.max()), float(values.min())
-    saturation = top if _pile_up(values, top, 2 * step) and top < 1.0 - step else 1.0
-    if _pile_up(values, top, 2 * step):
-        saturation = min(saturation, top)
+    saturation = top if _pile_up(values, top, 2 * step, CLIP_SHARE) else 1.0
     black = bottom if _pile_up(values, bottom, 2 * step, BLACK_SHARE) else 0.0
     low = black + _LOW_MARGIN
     high = min(float(np.quantile(values, 0.999)), saturation) - _HIGH_MARGIN
