@@ -529,8 +529,7 @@ def calibrate_frames(
     theta, spread = _reviewed_scale(found, thresholds, held, notes)
     residual, log_exposure = found.residual, found.response.log_exposure
     if held is not None:
-        residual, response = replace(found.problem, linear_black=black).solve(*theta)
-        log_exposure = response.log_exposure
+        residual, log_exposure = held.residual, held.log_exposure
     if is_linear and noise is None:
         noise = frame_noise(recording.frames, black, saturation, recording.adc_step)
     if noise:
@@ -614,9 +613,24 @@ def _reviewed_thresholds(found: _Consistency, notes: Assumptions) -> tuple[np.nd
     return found.theta, found.spread
 
 
+@dataclass(frozen=True)
+class _HeldLine:
+    """Thresholds fitted with the response held to the line of linear frames.
+
+    Attributes:
+        theta: ``(2,)`` ON and OFF thresholds.
+        residual: each usable pair's residual there (ln units).
+        log_exposure: the line, ``ln(v - black)`` at the knots (0 at the first).
+    """
+
+    theta: np.ndarray
+    residual: np.ndarray
+    log_exposure: np.ndarray
+
+
 def _held_linear(
     found: _Consistency, levels: FrameLevels, black: float, power: float, progress
-) -> np.ndarray | None:
+) -> _HeldLine | None:
     """The thresholds fitted again with the response held to the line of linear frames.
 
     A free curve trades its shape against the thresholds' common scale: on emulated linear
@@ -630,9 +644,9 @@ def _held_linear(
     a black found at 0.020 (true 0.040) put the held thresholds 4.6 % low, the blur's 0.6 %.
 
     Returns:
-        The thresholds ``(2,)``; None where the blur pins the scale and the line stands on a
-        black level that was not measured or disagrees with it (:data:`HELD_LINEAR_AGREEMENT`),
-        or where the line puts them where no DAVIS has them.
+        The thresholds and the line's fit; None where the blur pins the scale and the line
+        stands on a black level that was not measured or disagrees with it
+        (:data:`HELD_LINEAR_AGREEMENT`), or where the line puts them where no DAVIS has them.
     """
     if found.scale.measured and not levels.black_level > 0:
         progress("response not held linear: the blur pins the scale, the frames no black level")
@@ -649,13 +663,14 @@ def _held_linear(
         progress(f"response not held linear: it puts the thresholds at {np.round(theta, 3)}")
         return None
     progress(f"thresholds with the response held linear: ON {theta[0]:.3f}, OFF {theta[1]:.3f}")
-    return theta
+    residual, line = problem.solve(*theta)
+    return _HeldLine(theta, residual, line.log_exposure)
 
 
 def _reviewed_scale(
     found: _Consistency,
     thresholds: tuple[np.ndarray, np.ndarray],
-    held_linear: np.ndarray | None,
+    held_linear: _HeldLine | None,
     notes: Assumptions,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The thresholds at the linear frames' scale, else at the one the blur pins, else nominal.
@@ -671,7 +686,8 @@ def _reviewed_scale(
         if not found.scale.measured:
             instead = "the linear frames' scale, with the measured ratio"
             notes.add("threshold_scale", reason, instead)
-        return held_linear, held_linear * np.maximum(found.pixel_share, LINEAR_SCALE_SPREAD)
+        theta = held_linear.theta
+        return theta, theta * np.maximum(found.pixel_share, LINEAR_SCALE_SPREAD)
     if not found.scale.measured:
         instead = f"the nominal {DEFAULT_THRESHOLD} with the measured ratio"
         notes.add("threshold_scale", reason, instead)

@@ -228,14 +228,14 @@ def test_a_raw_frames_bent_curve_is_linear_but_not_without_the_raw_marks():
     ],
 )
 def test_the_scale_is_the_linear_frames_else_the_blurs_else_nominal(measured, held, said):
-    from davis_io.calibration.estimate import _reviewed_scale
+    from davis_io.calibration.estimate import _HeldLine, _reviewed_scale
 
     scale = type("Scale", (), {"measured": measured})()
     found = type("Found", (), {"scale": scale, "pixel_share": np.array([0.02, 0.08])})()
     theta, spread = np.array([0.27, 0.33]), np.array([0.01, 0.01])
     notes = Assumptions(lambda line: None)
-    held = None if held is None else np.array(held)
-    got, uncertainty = _reviewed_scale(found, (theta, spread), held, notes)
+    line = None if held is None else _HeldLine(np.array(held), np.zeros(0), np.zeros(0))
+    got, uncertainty = _reviewed_scale(found, (theta, spread), line, notes)
     if held is None:
         np.testing.assert_allclose(got, theta)
         np.testing.assert_allclose(uncertainty, spread)
