@@ -266,3 +266,22 @@ def test_an_estimate_off_the_physical_range_is_replaced_and_said(capsys):
         "dead_time_us not measured (50000 is outside what a DAVIS can have (a whole number "
         "from 0 to 20000 µs)): no dead time (0)"
     ]
+
+
+@pytest.mark.parametrize(
+    ("black", "power", "said"),
+    [
+        (0.0, 1.05, "the frames no black level"),  # a black level found only by the search
+        (0.02, 1.8, "power 1.80 is too far from 1"),  # a tone curve straight in ln v
+    ],
+)
+def test_a_blur_pinned_scale_is_not_traded_for_a_doubtful_line(black, power, said):
+    from davis_io.calibration.estimate import _held_linear
+    from davis_io.calibration.response_fit import FrameLevels
+
+    scale = type("Scale", (), {"measured": True})()
+    found = type("Found", (), {"scale": scale})()  # no problem: it must not be fitted again
+    levels = FrameLevels(black_level=black, saturation=0.9, low=black + 0.06, high=0.88)
+    lines = []
+    assert _held_linear(found, levels, 0.02, power, lines.append) is None
+    assert said in lines[0]
