@@ -634,7 +634,7 @@ def _held_linear(
     """The thresholds fitted again with the response held to the line of linear frames.
 
     A free curve trades its shape against the thresholds' common scale: on emulated linear
-    sessions its top bent up and the blur pinned the scale 3-14 % off (`lamp-s108` +14 %,
+    sessions its top bent up and the blur pinned the scale 1-14 % off (`lamp-s108` +14 %,
     `corridor-s103` -10 %); held to ``ln(v - black)``, the frames state the scale themselves
     (+4.9 % and +2.8 %), also where the frames are too sharp for the blur to pin it.
 
